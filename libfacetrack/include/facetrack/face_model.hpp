@@ -1,0 +1,65 @@
+#pragma once
+/// \file
+/// The linear 3D face model (converted from ICT-FaceKit by tools/convert_face_model):
+///   V(a, b) = neutral + sum_i a_i * identity_i + sum_j b_j * expression_j
+/// Units are centimetres in the model frame (see result.hpp).
+///
+/// A FaceModel is data: load it once, it is immutable, and one instance can be
+/// shared by any number of Trackers on any threads.
+
+#include "facetrack/arkit.hpp"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace facetrack {
+
+namespace model {
+struct FaceModelData;
+struct ArkitMapping;
+}
+
+class FaceModel {
+public:
+    /// Reads a model file. Throws facetrack::Error naming the file when it is
+    /// missing, truncated, corrupt or of another format version.
+    static std::shared_ptr<const FaceModel> load(const std::string& path);
+
+    /// The model shipped with facetrack (models/face_model.ftm), found as
+    /// described in docs/models.md.
+    static std::shared_ptr<const FaceModel> loadDefault();
+
+    /// The file format version this build reads and writes.
+    static std::uint32_t formatVersion();
+
+    int vertexCount() const;
+    int triangleCount() const;
+    int identityCount() const;
+    /// Share of the face region's identity variance the kept modes explain.
+    float identityExplainedVariance() const;
+    /// The model's expression names (ICT-FaceKit naming, e.g. "jawOpen", "eyeBlink_L").
+    const std::vector<std::string>& expressionNames() const;
+    /// Vertex index of each of the 68 iBUG landmarks.
+    std::vector<int> landmarkVertices() const;
+    const std::string& sourcePath() const;
+
+    /// ARKit-52 weights (arkitNames() order) from native expression weights
+    /// (expressionNames() order). Throws Error when `native` has the wrong size.
+    std::array<float, kArkitBlendshapeCount> toArkit(const std::vector<float>& native) const;
+
+    /// Internal representation, for facetrack's own stages.
+    const model::FaceModelData& data() const { return *data_; }
+
+    explicit FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source);
+
+private:
+    std::shared_ptr<const model::FaceModelData> data_;
+    std::string source_;
+    std::vector<std::string> expression_names_;
+    std::shared_ptr<const model::ArkitMapping> arkit_;
+};
+
+}  // namespace facetrack

@@ -1,0 +1,113 @@
+#pragma once
+// Versioned, checksummed binary model files, and bounds-checked readers and
+// writers for their payloads. Every facetrack model file (face model, LBF
+// landmarks, ...) uses this one container:
+//
+//   offset  0  char[8]   magic, names the kind of model
+//   offset  8  uint32    format version
+//   offset 12  uint32    reserved, 0
+//   offset 16  uint64    payload size in bytes
+//   offset 24  uint64    FNV-1a 64 checksum of the payload
+//   offset 32  payload   little-endian, written by BinaryWriter
+//
+// All integers and floats are stored in the machine's byte order, which is
+// little-endian on every platform facetrack targets (checked at compile time).
+
+#include "facetrack/error.hpp"
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+namespace facetrack::core {
+
+static_assert(std::endian::native == std::endian::little, "facetrack model files are little-endian");
+
+std::uint64_t fnv1a64(const void* data, std::size_t size);
+
+class BinaryWriter {
+public:
+    template <class T>
+    void put(const T& value) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        bytes_.append(reinterpret_cast<const char*>(&value), sizeof(T));
+    }
+    template <class T>
+    void putArray(const T* values, std::size_t count) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        bytes_.append(reinterpret_cast<const char*>(values), sizeof(T) * count);
+    }
+    /// A uint64 element count, then the elements.
+    template <class T>
+    void putVector(const std::vector<T>& values) {
+        put<std::uint64_t>(values.size());
+        putArray(values.data(), values.size());
+    }
+    void putString(std::string_view s);
+    /// Floats stored as IEEE half precision (2 bytes each).
+    void putHalfs(const float* values, std::size_t count);
+
+    const std::string& bytes() const { return bytes_; }
+
+private:
+    std::string bytes_;
+};
+
+/// Reads a payload. Any read past the end throws Error("<what>: ... truncated or corrupt").
+class BinaryReader {
+public:
+    BinaryReader(std::string_view bytes, std::string what) : bytes_(bytes), what_(std::move(what)) {}
+
+    template <class T>
+    T get() {
+        static_assert(std::is_trivially_copyable_v<T>);
+        T value;
+        std::memcpy(&value, take(sizeof(T)), sizeof(T));
+        return value;
+    }
+    template <class T>
+    void getArray(T* values, std::size_t count) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        if (count > remaining() / sizeof(T)) fail("array of " + std::to_string(count) + " elements");
+        std::memcpy(values, take(sizeof(T) * count), sizeof(T) * count);
+    }
+    template <class T>
+    std::vector<T> getVector() {
+        const auto count = get<std::uint64_t>();
+        if (count > remaining() / sizeof(T)) fail("array of " + std::to_string(count) + " elements");
+        std::vector<T> values(count);
+        getArray(values.data(), count);
+        return values;
+    }
+    std::string getString();
+    void getHalfs(float* values, std::size_t count);
+
+    std::size_t remaining() const { return bytes_.size() - pos_; }
+    /// Throws unless every byte was read: trailing bytes mean a format mismatch.
+    void expectEnd() const;
+    /// Throws Error naming the file and what was being read.
+    [[noreturn]] void fail(const std::string& reading) const;
+
+private:
+    const char* take(std::size_t n);
+
+    std::string_view bytes_;
+    std::string what_;
+    std::size_t pos_ = 0;
+};
+
+/// Writes the container around `payload`. Throws Error when the file cannot be written.
+void writeModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
+                    const std::string& payload);
+
+/// Reads and validates the container; returns the payload. Throws Error naming
+/// the file when it is missing, truncated, not of this kind (magic), of
+/// another version, or fails the checksum. `kind` is a human name for messages.
+std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
+                          const std::string& kind);
+
+}  // namespace facetrack::core

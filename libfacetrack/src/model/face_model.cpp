@@ -1,0 +1,45 @@
+#include "facetrack/face_model.hpp"
+
+#include "facetrack/error.hpp"
+#include "facetrack/version.hpp"
+#include "model/arkit_mapping.hpp"
+#include "model/face_model_data.hpp"
+
+namespace facetrack {
+
+FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source)
+    : data_(std::move(data)), source_(std::move(source)) {
+    if (!data_) throw Error("FaceModel: null model data");
+    for (const auto& e : data_->expressions) expression_names_.push_back(e.name);
+    arkit_ = std::make_shared<const model::ArkitMapping>(model::makeArkitMapping(expression_names_));
+}
+
+std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path) {
+    auto data = std::make_shared<const model::FaceModelData>(model::readFaceModel(path));
+    return std::make_shared<const FaceModel>(std::move(data), path);
+}
+
+std::shared_ptr<const FaceModel> FaceModel::loadDefault() { return load(modelDirectory() + "/face_model.ftm"); }
+
+std::uint32_t FaceModel::formatVersion() { return model::kFaceModelVersion; }
+
+int FaceModel::vertexCount() const { return data_->vertexCount(); }
+int FaceModel::triangleCount() const { return static_cast<int>(data_->triangles.size()); }
+int FaceModel::identityCount() const { return data_->identityCount(); }
+float FaceModel::identityExplainedVariance() const { return data_->identity_explained_variance; }
+const std::vector<std::string>& FaceModel::expressionNames() const { return expression_names_; }
+const std::string& FaceModel::sourcePath() const { return source_; }
+
+std::array<float, kArkitBlendshapeCount> FaceModel::toArkit(const std::vector<float>& native) const {
+    if (native.size() != expression_names_.size()) {
+        throw Error("toArkit: " + std::to_string(native.size()) + " weights given, the model has " +
+                    std::to_string(expression_names_.size()) + " expressions");
+    }
+    return model::toArkit(*arkit_, native);
+}
+
+std::vector<int> FaceModel::landmarkVertices() const {
+    return std::vector<int>(data_->landmark_vertices.begin(), data_->landmark_vertices.end());
+}
+
+}  // namespace facetrack

@@ -1,0 +1,108 @@
+// Runs the installed-to-be `facetrack` binary as a user would.
+
+#include "test_support.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <fstream>
+#include <cstdio>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace facetrack {
+namespace {
+
+struct CliRun {
+    int exit_code = -1;
+    std::string out;
+    std::string err;
+};
+
+CliRun runCli(const std::string& args) {
+    const std::string errFile = "/tmp/facetrack_test_cli_stderr.txt";
+    const std::string cmd = std::string(FACETRACK_CLI) + " " + args + " 2>" + errFile;
+    CliRun run;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe) return run;
+    std::array<char, 4096> buffer;
+    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
+    const int status = pclose(pipe);
+    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream err(errFile);
+    run.err.assign(std::istreambuf_iterator<char>(err), {});
+    return run;
+}
+
+std::vector<nlohmann::json> jsonLines(const std::string& text) {
+    std::vector<nlohmann::json> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) lines.push_back(nlohmann::json::parse(line));
+    return lines;
+}
+
+TEST(Cli, InfoNamesModelsDetectorAndStages) {
+    const CliRun run = runCli("info");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.out.find("face model: "), std::string::npos);
+    EXPECT_NE(run.out.find("26719 vertices"), std::string::npos);
+    EXPECT_NE(run.out.find("detect "), std::string::npos);
+    EXPECT_NE(run.out.find("landmarks  not available"), std::string::npos);
+}
+
+TEST(Cli, DetectWritesOneJsonLinePerImage) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string dir = test::sharedDir() + "/data/faces300w/lfpw/testset";
+    const CliRun run = runCli("detect '" + dir + "/image_0001.jpg'");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const auto lines = jsonLines(run.out);
+    ASSERT_EQ(lines.size(), 1u);
+    EXPECT_EQ(lines[0]["image"], dir + "/image_0001.jpg");
+    EXPECT_EQ(lines[0]["frame"], 0);
+    ASSERT_GE(lines[0]["faces"].size(), 1u);
+    const auto& box = lines[0]["faces"][0]["box"];
+    ASSERT_EQ(box.size(), 4u);
+    EXPECT_LT(box[0].get<double>(), box[2].get<double>());
+    EXPECT_LT(box[1].get<double>(), box[3].get<double>());
+    EXPECT_GT(lines[0]["faces"][0]["score"].get<double>(), 0.5);
+}
+
+TEST(Cli, DetectOnAClipNumbersFrames) {
+    FACETRACK_REQUIRE_SHARED();
+    const CliRun run = runCli("track '" + test::sharedDir() + "/data/clips/liveportrait_d3_frown_surprise.mp4' --frames 3");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const auto lines = jsonLines(run.out);
+    ASSERT_EQ(lines.size(), 3u);
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(lines[i]["frame"], i);
+        EXPECT_NEAR(lines[i]["time_s"].get<double>(), i / 30.0, 0.01);
+        ASSERT_EQ(lines[i]["faces"].size(), 1u);
+        EXPECT_TRUE(lines[i]["faces"][0]["landmarks"].is_null());  // stage not built yet
+        EXPECT_TRUE(lines[i]["timings_ms"].contains("detect"));
+    }
+}
+
+TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
+    for (const std::string args : {"detect /nonexistent/face.jpg", "detect", "detect /etc/hostname",
+                                   "detect --detector magic x.jpg", "detect --bogus x.jpg", "frobnicate",
+                                   "track /nonexistent.mp4", "eval-detect /nonexistent"}) {
+        const CliRun run = runCli(args);
+        EXPECT_NE(run.exit_code, 0) << args;
+        EXPECT_NE(run.exit_code, -1) << args << ": crashed";
+        EXPECT_TRUE(run.out.empty()) << args << ": " << run.out;
+        const auto lines = std::count(run.err.begin(), run.err.end(), '\n');
+        EXPECT_GE(lines, 1) << args;
+        EXPECT_LE(lines, 2) << args << ": " << run.err;  // the detector log line may precede the error
+        EXPECT_NE(run.err.find("facetrack"), std::string::npos) << args << ": " << run.err;
+    }
+}
+
+TEST(Cli, HelpExitsZero) {
+    EXPECT_EQ(runCli("--help").exit_code, 0);
+    EXPECT_EQ(runCli("detect --help").exit_code, 0);
+    EXPECT_EQ(runCli("track --help").exit_code, 0);
+}
+
+}  // namespace
+}  // namespace facetrack

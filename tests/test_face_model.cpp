@@ -1,0 +1,199 @@
+#include "core/pts.hpp"
+#include "core/shape2d.hpp"
+#include "facetrack/error.hpp"
+#include "facetrack/face_model.hpp"
+#include "model/face_model_data.hpp"
+#include "test_support.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+namespace facetrack {
+namespace {
+
+namespace fs = std::filesystem;
+
+model::FaceModelData tinyModel() {
+    model::FaceModelData d;
+    d.neutral = Eigen::Matrix3Xf::Random(3, 6);
+    d.identity_basis = Eigen::MatrixXf::Random(18, 2);
+    d.identity_explained_variance = 0.97f;
+    d.face_vertex_count = 4;
+    model::SparseBlendshape jaw{"jawOpen", {1, 4}, Eigen::Matrix3Xf::Random(3, 2)};
+    d.expressions = {jaw};
+    d.triangles = {{0, 1, 2}, {2, 3, 4}};
+    d.uvs = Eigen::Matrix2Xf::Random(2, 7);
+    d.triangle_uvs = {{0, 1, 2}, {5, 6, 4}};
+    for (int i = 0; i < model::kLandmarkCount; ++i) d.landmark_vertices[i] = i % 6;
+    for (auto& list : d.contour_candidates) list = {0, 3};
+    d.left_eye = {4, 5, {1.f, 2.f, 3.f}, {0.f, 0.f, 1.f}, 1.5f, 0.6f};
+    d.right_eye = {4, 5, {-1.f, 2.f, 3.f}, {0.f, 0.f, 1.f}, 1.5f, 0.6f};
+    return d;
+}
+
+std::string copyOfShippedModel(const std::string& name) {
+    const std::string path = (fs::temp_directory_path() / ("facetrack_test_" + name)).string();
+    fs::copy_file(test::shippedFaceModel(), path, fs::copy_options::overwrite_existing);
+    return path;
+}
+
+std::string loadError(const std::string& path) {
+    try {
+        FaceModel::load(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(FaceModelFile, WriteReadRoundTrip) {
+    const model::FaceModelData d = tinyModel();
+    const std::string path = (fs::temp_directory_path() / "facetrack_test_tiny.ftm").string();
+    model::writeFaceModel(path, d);
+    const model::FaceModelData back = model::readFaceModel(path);
+    fs::remove(path);
+
+    EXPECT_EQ(back.neutral, d.neutral);
+    // The identity basis is stored in half precision.
+    EXPECT_LT((back.identity_basis - d.identity_basis).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_EQ(back.identity_explained_variance, d.identity_explained_variance);
+    EXPECT_EQ(back.face_vertex_count, d.face_vertex_count);
+    ASSERT_EQ(back.expressions.size(), 1u);
+    EXPECT_EQ(back.expressions[0].name, "jawOpen");
+    EXPECT_EQ(back.expressions[0].vertices, d.expressions[0].vertices);
+    EXPECT_EQ(back.expressions[0].deltas, d.expressions[0].deltas);
+    EXPECT_EQ(back.triangles, d.triangles);
+    EXPECT_EQ(back.uvs, d.uvs);
+    EXPECT_EQ(back.triangle_uvs, d.triangle_uvs);
+    EXPECT_EQ(back.landmark_vertices, d.landmark_vertices);
+    EXPECT_EQ(back.contour_candidates, d.contour_candidates);
+    EXPECT_EQ(back.left_eye.centre, d.left_eye.centre);
+    EXPECT_EQ(back.right_eye.iris_radius, d.right_eye.iris_radius);
+}
+
+TEST(FaceModelFile, InconsistentDataIsNotWritten) {
+    model::FaceModelData d = tinyModel();
+    d.triangles.push_back({0, 1, 99});
+    EXPECT_THROW(model::writeFaceModel((fs::temp_directory_path() / "facetrack_bad.ftm").string(), d), Error);
+}
+
+TEST(ShippedFaceModel, HasWhatTheTrackerNeeds) {
+    const auto m = FaceModel::load(test::shippedFaceModel());
+    const auto& d = m->data();
+    EXPECT_EQ(m->vertexCount(), 26719);
+    EXPECT_EQ(m->triangleCount(), 2 * 25836 + 548);  // quads split, triangles kept
+    EXPECT_GE(m->identityExplainedVariance(), 0.95f);
+    EXPECT_GE(m->identityCount(), 5);
+    EXPECT_EQ(m->expressionNames().size(), 57u);
+    EXPECT_EQ(m->expressionNames()[26], "jawOpen");
+    EXPECT_EQ(d.face_vertex_count, 9409u);
+
+    // Identity modes are scaled to unit-variance coefficients: the first ones move vertices by millimetres.
+    EXPECT_GT(d.identity_basis.col(0).cwiseAbs().maxCoeff(), 0.1f);
+
+    for (int i = 0; i < model::kContourLandmarkCount; ++i) {
+        const auto& list = d.contour_candidates[i];
+        EXPECT_EQ(list.front(), d.landmark_vertices[i]) << "contour " << i;
+        EXPECT_GE(list.size(), 4u) << "contour " << i;
+        for (auto v : list) EXPECT_LT(v, d.face_vertex_count) << "contour " << i;
+    }
+    // Side contour candidates move back around the head, towards the ear.
+    const Eigen::Vector3f first = d.neutral.col(d.contour_candidates[2].front());
+    const Eigen::Vector3f last = d.neutral.col(d.contour_candidates[2].back());
+    EXPECT_LT(last.z(), first.z() - 0.5f);
+
+    EXPECT_GT(d.left_eye.centre.x(), 2.5f);   // subject's left is +x
+    EXPECT_LT(d.right_eye.centre.x(), -2.5f);
+    for (const auto* eye : {&d.left_eye, &d.right_eye}) {
+        EXPECT_NEAR(eye->radius, 1.58f, 0.05f);
+        EXPECT_GT(eye->iris_radius, 0.5f);  // human iris: about 0.6 cm
+        EXPECT_LT(eye->iris_radius, 0.7f);
+        EXPECT_GT(eye->optical_axis.z(), 0.95f);
+    }
+}
+
+TEST(ShippedFaceModel, CorruptCopyGivesAClearError) {
+    const std::string path = copyOfShippedModel("corrupt.ftm");
+    {
+        std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(1000);
+        f.put('\x7f');
+    }
+    const std::string msg = loadError(path);
+    fs::remove(path);
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find("corrupt"), std::string::npos) << msg;
+}
+
+TEST(ShippedFaceModel, TruncatedCopyGivesAClearError) {
+    const std::string path = copyOfShippedModel("truncated.ftm");
+    fs::resize_file(path, fs::file_size(path) / 2);
+    const std::string msg = loadError(path);
+    fs::remove(path);
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find("truncated"), std::string::npos) << msg;
+}
+
+TEST(ShippedFaceModel, OtherVersionGivesAClearError) {
+    const std::string path = copyOfShippedModel("version.ftm");
+    {
+        std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(8);  // the version field
+        const std::uint32_t future = model::kFaceModelVersion + 1;
+        f.write(reinterpret_cast<const char*>(&future), 4);
+    }
+    const std::string msg = loadError(path);
+    fs::remove(path);
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find("format version " + std::to_string(model::kFaceModelVersion + 1)), std::string::npos) << msg;
+}
+
+TEST(ShippedFaceModel, MissingFileGivesAClearError) {
+    const std::string msg = loadError("/nonexistent/face_model.ftm");
+    EXPECT_NE(msg.find("/nonexistent/face_model.ftm"), std::string::npos) << msg;
+}
+
+// The model's 68 landmark vertices, seen frontally, against the mean 300-W shape.
+TEST(ShippedFaceModel, FrontalLandmarksMatchThe300WMeanShape) {
+    FACETRACK_REQUIRE_SHARED();
+    std::vector<core::Shape2> shapes;
+    for (const char* subset : {"helen/trainset", "lfpw/trainset", "afw"}) {
+        for (const auto& entry : fs::directory_iterator(test::sharedDir() + "/data/faces300w/" + subset)) {
+            if (entry.path().extension() == ".pts") shapes.push_back(core::readPts(entry.path().string()));
+        }
+    }
+    ASSERT_GT(shapes.size(), 1000u);
+    const core::Shape2 mean = core::procrustesMean(shapes);
+
+    const auto m = FaceModel::load(test::shippedFaceModel());
+    core::Shape2 projected(2, 68);
+    for (int i = 0; i < 68; ++i) {
+        const Eigen::Vector3f v = m->data().neutral.col(m->data().landmark_vertices[i]);
+        projected.col(i) = Eigen::Vector2f(v.x(), -v.y());  // orthographic, image y down
+    }
+    const core::Shape2 aligned = core::alignSimilarity(projected, mean).apply(projected);
+    const float nme = core::nme68(aligned, mean);
+    RecordProperty("nme_percent", std::to_string(100.f * nme));
+    std::printf("frontal model landmarks vs 300-W mean shape: NME %.2f%%\n", 100.f * nme);
+    EXPECT_LT(nme, 0.10f);
+    // The mirror image must fit worse: the model's left/right agree with iBUG's.
+    core::Shape2 mirrored = projected;
+    mirrored.row(0) *= -1.f;
+    EXPECT_GT(core::nme68(core::alignSimilarity(mirrored, mean).apply(mirrored), mean), nme);
+}
+
+// The shipped file is exactly what the converter makes from ../shared.
+TEST(ShippedFaceModel, ConverterReproducesTheShippedFile) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string out = (fs::temp_directory_path() / "facetrack_test_converted.ftm").string();
+    const std::string cmd = std::string(FACETRACK_CONVERTER) + " --source '" + test::sharedDir() +
+                            "/models/ict-facekit/FaceXModel' --out '" + out + "' > /dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::ifstream a(out, std::ios::binary), b(test::shippedFaceModel(), std::ios::binary);
+    const std::string bytesA((std::istreambuf_iterator<char>(a)), {}), bytesB((std::istreambuf_iterator<char>(b)), {});
+    fs::remove(out);
+    EXPECT_TRUE(bytesA == bytesB) << "models/face_model.ftm is stale: regenerate it (models/README.md)";
+}
+
+}  // namespace
+}  // namespace facetrack

@@ -1,0 +1,55 @@
+#pragma once
+// A small argument parser: positionals, and "--name value" or "--flag" options
+// declared up front, so that a mistyped option is an error, not ignored.
+
+#include "facetrack/error.hpp"
+
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace facetrack::cli {
+
+class Args {
+public:
+    /// valued: options that take a value; flags: options that do not.
+    Args(const std::vector<std::string>& argv, const std::set<std::string>& valued,
+         const std::set<std::string>& flags = {}) {
+        for (std::size_t i = 0; i < argv.size(); ++i) {
+            const std::string& a = argv[i];
+            if (a.rfind("--", 0) != 0 || a == "--") {
+                positional_.push_back(a);
+            } else if (flags.count(a)) {
+                options_[a] = "";
+            } else if (valued.count(a)) {
+                if (i + 1 >= argv.size()) throw Error("option " + a + " needs a value");
+                options_[a] = argv[++i];
+            } else {
+                throw Error("unknown option '" + a + "'");
+            }
+        }
+    }
+    const std::vector<std::string>& positional() const { return positional_; }
+    bool has(const std::string& name) const { return options_.count(name) != 0; }
+    std::string get(const std::string& name, const std::string& fallback = "") const {
+        const auto it = options_.find(name);
+        return it == options_.end() ? fallback : it->second;
+    }
+    double number(const std::string& name, double fallback) const {
+        if (!has(name)) return fallback;
+        try {
+            std::size_t used = 0;
+            const double v = std::stod(get(name), &used);
+            if (used == get(name).size()) return v;
+        } catch (const std::exception&) {
+        }
+        throw Error("option " + name + " expects a number, got '" + get(name) + "'");
+    }
+
+private:
+    std::vector<std::string> positional_;
+    std::map<std::string, std::string> options_;
+};
+
+}  // namespace facetrack::cli

@@ -1,0 +1,37 @@
+#include "commands.hpp"
+#include "media.hpp"
+
+#include "core/image.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+
+namespace facetrack::cli {
+
+int runDetect(const std::vector<std::string>& argv) {
+    const Args args(argv, kDetectorOptions, {"--help"});
+    if (args.has("--help")) {
+        std::puts("usage: facetrack detect IMAGE|DIR|CLIP [--detector auto|yunet|cascade] [--yunet PATH] [--min-score S]\n"
+                  "One JSON line per image or video frame:\n"
+                  "  {\"image\": PATH, \"frame\": N, \"faces\": [{\"box\": [x0,y0,x1,y1], \"score\": s}]}\n"
+                  "Boxes are in 0-based pixels of the input.");
+        return 0;
+    }
+    if (args.positional().size() != 1) throw Error("detect needs one IMAGE, DIR or CLIP (see --help)");
+    auto reader = MediaReader::open(args.positional()[0]);
+    auto detector = createFaceDetector(detectorConfig(args));
+    MediaFrame frame;
+    while (reader.next(frame)) {
+        nlohmann::ordered_json faces = nlohmann::ordered_json::array();
+        for (const auto& d : detector->detect(core::viewOf(frame.bgr))) {
+            faces.push_back({{"box", {round2(d.box.x0), round2(d.box.y0), round2(d.box.x1), round2(d.box.y1)}},
+                             {"score", round2(d.score)}});
+        }
+        std::cout << nlohmann::ordered_json{{"image", frame.source}, {"frame", frame.index}, {"faces", faces}}.dump() << '\n';
+    }
+    return 0;
+}
+
+}  // namespace facetrack::cli

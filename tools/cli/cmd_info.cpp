@@ -1,0 +1,38 @@
+#include "commands.hpp"
+
+#include "facetrack/facetrack.hpp"
+
+#include <cstdio>
+
+namespace facetrack::cli {
+
+int runInfo(const std::vector<std::string>& argv) {
+    const Args args(argv, kDetectorOptions, {"--help"});
+    if (args.has("--help")) {
+        std::puts("usage: facetrack info [--detector auto|yunet|cascade] [--yunet PATH]\n"
+                  "Prints the version, the models in use and which pipeline stages are available.");
+        return 0;
+    }
+    if (!args.positional().empty()) throw Error("info takes no arguments");
+    setLogHandler({});
+    std::printf("facetrack %s\n", versionString());
+    std::printf("model directory: %s\n", modelDirectory().c_str());
+
+    const auto model = FaceModel::loadDefault();
+    std::printf("face model: %s (format v%u)\n", model->sourcePath().c_str(), FaceModel::formatVersion());
+    std::printf("  %d vertices, %d triangles, %d identity modes (%.1f%% of face-region variance), %zu expressions\n",
+                model->vertexCount(), model->triangleCount(), model->identityCount(),
+                100.0 * model->identityExplainedVariance(), model->expressionNames().size());
+    std::printf("  output: ARKit-%d blendshapes (tongueOut unsupported, always 0)\n", kArkitBlendshapeCount);
+
+    TrackerConfig config;
+    config.detector = detectorConfig(args);
+    const Tracker tracker(model, config);
+    std::puts("stages:");
+    for (const auto& stage : tracker.stages()) {
+        std::printf("  %-10s %s\n", stage.name.c_str(), stage.detail.c_str());
+    }
+    return 0;
+}
+
+}  // namespace facetrack::cli

@@ -1,0 +1,49 @@
+// facetrack: the command-line front end (docs/cli.md).
+
+#include "commands.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <map>
+
+namespace {
+
+const char* kUsage = R"(usage: facetrack COMMAND [ARGS]
+
+commands:
+  info                               models, versions, detector in use, stages
+  detect IMAGE|DIR|CLIP              faces per image or frame, as JSON lines
+  track [CLIP|--camera /dev/videoN]  run the tracker, JSON lines per frame
+  eval-detect DIR                    detector recall and speed on .pts-annotated images
+
+common options:
+  --detector auto|yunet|cascade      which face detector (default auto: YuNet if found)
+  --yunet PATH                       YuNet 2022mar .onnx (else FACETRACK_YUNET_MODEL, then the usual places)
+  --min-score S                      drop detections scoring below S (default 0.8)
+
+'facetrack COMMAND --help' describes one command; docs/cli.md has the details.
+)";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace facetrack::cli;
+    const std::map<std::string, std::function<int(const std::vector<std::string>&)>> commands = {
+        {"info", runInfo}, {"detect", runDetect}, {"track", runTrack}, {"eval-detect", runEvalDetect}};
+    if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
+        std::fputs(kUsage, argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    const auto command = commands.find(argv[1]);
+    if (command == commands.end()) {
+        std::fprintf(stderr, "facetrack: unknown command '%s' (try 'facetrack --help')\n", argv[1]);
+        return 2;
+    }
+    try {
+        return command->second(std::vector<std::string>(argv + 2, argv + argc));
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "facetrack %s: %s\n", argv[1], e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,101 @@
+#include "media.hpp"
+
+#include "facetrack/error.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+
+namespace fs = std::filesystem;
+
+namespace facetrack::cli {
+
+bool isImageFile(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    for (const char* known : {".jpg", ".jpeg", ".png", ".bmp", ".pgm", ".ppm", ".tif", ".tiff", ".webp"}) {
+        if (ext == known) return true;
+    }
+    return false;
+}
+
+std::vector<std::string> listImages(const std::string& dir) {
+    std::vector<std::string> images;
+    for (const auto& entry : fs::recursive_directory_iterator(dir, fs::directory_options::skip_permission_denied)) {
+        if (entry.is_regular_file() && isImageFile(entry.path().string())) images.push_back(entry.path().string());
+    }
+    std::sort(images.begin(), images.end());
+    return images;
+}
+
+std::vector<std::string> listCameras() {
+    std::vector<std::string> cameras;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator("/dev", ec)) {
+        const std::string name = entry.path().filename().string();
+        if (name.rfind("video", 0) == 0) cameras.push_back(entry.path().string());
+    }
+    std::sort(cameras.begin(), cameras.end());
+    return cameras;
+}
+
+MediaReader MediaReader::open(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw Error("no such file or directory: '" + path + "'");
+    MediaReader reader;
+    if (fs::is_directory(path, ec)) {
+        reader.images_ = listImages(path);
+        if (reader.images_.empty()) throw Error("no images (.jpg, .png, ...) in folder '" + path + "'");
+    } else if (isImageFile(path)) {
+        reader.images_ = {path};
+    } else {
+        reader.video_.open(path, cv::CAP_FFMPEG);
+        if (!reader.video_.isOpened()) throw Error("cannot read '" + path + "' as an image or a video");
+        reader.video_name_ = path;
+        reader.fps_ = reader.video_.get(cv::CAP_PROP_FPS);
+        if (!(reader.fps_ > 0.0 && reader.fps_ < 1000.0)) reader.fps_ = 30.0;
+    }
+    return reader;
+}
+
+MediaReader MediaReader::openCamera(const std::string& device) {
+    MediaReader reader;
+    reader.video_.open(device, cv::CAP_V4L2);
+    if (!reader.video_.isOpened()) {
+        std::string found;
+        for (const auto& c : listCameras()) found += " " + c;
+        throw Error("cannot open camera '" + device + "'" +
+                    (found.empty() ? std::string(" (no /dev/video* devices exist)") : "; cameras present:" + found));
+    }
+    reader.video_name_ = device;
+    reader.fps_ = reader.video_.get(cv::CAP_PROP_FPS);
+    if (!(reader.fps_ > 0.0 && reader.fps_ < 1000.0)) reader.fps_ = 30.0;
+    return reader;
+}
+
+bool MediaReader::next(MediaFrame& frame) {
+    if (video_.isOpened()) {
+        if (!video_.read(frame.bgr) || frame.bgr.empty()) return false;
+        frame.source = video_name_;
+        frame.index = video_index_++;
+        frame.time_s = frame.index / fps_;
+        return true;
+    }
+    while (next_image_ < images_.size()) {
+        const std::string& path = images_[next_image_++];
+        frame.bgr = cv::imread(path, cv::IMREAD_COLOR);
+        if (frame.bgr.empty()) {
+            std::cerr << "facetrack: skipping unreadable image '" << path << "'\n";
+            continue;
+        }
+        frame.source = path;
+        frame.index = 0;
+        frame.time_s = 0.0;
+        return true;
+    }
+    return false;
+}
+
+}  // namespace facetrack::cli
