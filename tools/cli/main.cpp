@@ -20,7 +20,7 @@ commands:
 common options:
   --detector auto|yunet|cascade      which face detector (default auto: YuNet if found)
   --yunet PATH                       YuNet 2022mar .onnx (else FACETRACK_YUNET_MODEL, then the usual places)
-  --min-score S                      drop detections scoring below S (default 0.8)
+  --min-score S                      drop detections scoring below S (default 0.5)
 
 'facetrack COMMAND --help' describes one command; docs/cli.md has the details.
 )";

@@ -35,7 +35,10 @@ struct DetectorConfig {
     DetectorKind kind = DetectorKind::Auto;
     std::string yunet_model;   ///< empty: search as described above
     std::string cascade_file;  ///< empty: opencv-data's haarcascade_frontalface_alt2.xml
-    float min_score = 0.8f;    ///< YuNet detections below this are dropped (0.64 fires on a black frame)
+    /// Detections scoring below this are dropped. YuNet detections under 0.9
+    /// must also be confirmed at a second, smaller input size, which rejects
+    /// its false alarms on featureless frames (docs/detector.md).
+    float min_score = 0.5f;
     int detect_width = 320;    ///< frames wider than this are downscaled to it before detection
     int max_faces = 8;         ///< keep at most this many, highest score first
 };

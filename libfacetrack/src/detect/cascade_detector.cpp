@@ -37,10 +37,10 @@ std::vector<Detection> CascadeDetector::detect(const ImageView& frame) {
     for (std::size_t i = 0; i < rects.size(); ++i) {
         const auto& r = rects[i];
         const float n = static_cast<float>(neighbours[i]);
-        detections.push_back({{float(r.x), float(r.y), float(r.x + r.width), float(r.y + r.height)},
+        detections.push_back({toFrame(float(r.x), float(r.y), float(r.width), float(r.height), small.scale),
                               n / (n + kMinNeighbors)});
     }
-    return finish(std::move(detections), small.scale, config_.max_faces);
+    return sortAndLimit(std::move(detections), config_.max_faces);
 }
 
 }  // namespace facetrack::detect

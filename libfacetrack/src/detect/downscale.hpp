@@ -20,7 +20,10 @@ struct Downscaled {
 
 Downscaled downscale(const cv::Mat& frame, int maxWidth);
 
-/// Highest score first, at most maxFaces, boxes mapped back by 1/scale.
-std::vector<Detection> finish(std::vector<Detection> detections, float scale, int maxFaces);
+/// A box (x, y, w, h) found in the downscaled image, in frame pixels.
+Box toFrame(float x, float y, float w, float h, float scale);
+
+/// Highest score first, at most maxFaces.
+std::vector<Detection> sortAndLimit(std::vector<Detection> detections, int maxFaces);
 
 }  // namespace facetrack::detect

@@ -6,7 +6,8 @@
 namespace facetrack::detect {
 
 /// YuNet through cv::FaceDetectorYN, run on a frame downscaled to
-/// DetectorConfig::detect_width.
+/// DetectorConfig::detect_width; unsure detections get a second look at a
+/// smaller size (see yunet_detector.cpp).
 class YuNetDetector final : public FaceDetector {
 public:
     YuNetDetector(const std::string& modelPath, const DetectorConfig& config);
@@ -15,6 +16,9 @@ public:
     std::string modelPath() const override { return path_; }
 
 private:
+    /// Detections in `image`, mapped to frame pixels by 1/scale.
+    std::vector<Detection> run(const cv::Mat& image, float scale);
+
     std::string path_;
     DetectorConfig config_;
     cv::Ptr<cv::FaceDetectorYN> net_;
