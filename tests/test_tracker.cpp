@@ -11,9 +11,10 @@
 namespace facetrack {
 namespace {
 
-std::shared_ptr<const FaceModel> shippedModel() {
+/// The shipped face model, without a landmark model: the landmarks stage is off.
+Models faceOnly() {
     static const auto model = FaceModel::load(test::shippedFaceModel());
-    return model;
+    return Models{model, nullptr};
 }
 
 std::vector<cv::Mat> clipFrames(int count) {
@@ -24,9 +25,9 @@ std::vector<cv::Mat> clipFrames(int count) {
     return frames;
 }
 
-TEST(Tracker, ReportsDetectionAndLeavesUnbuiltStagesEmpty) {
+TEST(Tracker, ReportsDetectionAndLeavesStagesWithoutModelsEmpty) {
     FACETRACK_REQUIRE_SHARED();
-    Tracker tracker(shippedModel());
+    Tracker tracker(faceOnly());
     for (const auto& frame : clipFrames(5)) {
         const FrameResult result = tracker.process(core::viewOf(frame), 0.0);
         ASSERT_EQ(result.faces.size(), 1u);
@@ -44,7 +45,7 @@ TEST(Tracker, ReportsDetectionAndLeavesUnbuiltStagesEmpty) {
 }
 
 TEST(Tracker, StagesSayWhatIsNotAvailable) {
-    const Tracker tracker(shippedModel());
+    const Tracker tracker(faceOnly());
     const auto stages = tracker.stages();
     ASSERT_EQ(stages.size(), 6u);
     EXPECT_EQ(stages[0].name, "detect");
@@ -61,17 +62,17 @@ TEST(Tracker, MaxFacesLimitsTheResult) {
     const cv::Mat image = cv::imread(test::sharedDir() + "/data/faces300w/afw/111076519_1.jpg");
     ASSERT_FALSE(image.empty());
     TrackerConfig config;
-    EXPECT_EQ(Tracker(shippedModel(), config).process(core::viewOf(image), 0.0).faces.size(), 1u);
+    EXPECT_EQ(Tracker(faceOnly(), config).process(core::viewOf(image), 0.0).faces.size(), 1u);
     config.max_faces = 2;
-    EXPECT_EQ(Tracker(shippedModel(), config).process(core::viewOf(image), 0.0).faces.size(), 2u);
+    EXPECT_EQ(Tracker(faceOnly(), config).process(core::viewOf(image), 0.0).faces.size(), 2u);
 }
 
 TEST(Tracker, BadSetupAndBadFramesGiveErrors) {
-    EXPECT_THROW(Tracker(nullptr), Error);
+    EXPECT_THROW(Tracker(Models{}), Error);
     TrackerConfig config;
     config.max_faces = 0;
-    EXPECT_THROW(Tracker(shippedModel(), config), Error);
-    Tracker tracker(shippedModel());
+    EXPECT_THROW(Tracker(faceOnly(), config), Error);
+    Tracker tracker(faceOnly());
     EXPECT_THROW(tracker.process(ImageView{}, 0.0), Error);
     const std::uint8_t pixel[3] = {0, 0, 0};
     EXPECT_THROW(tracker.process(ImageView{pixel, 1, 1, 1, PixelFormat::Bgr8}, 0.0), Error);
@@ -82,7 +83,7 @@ TEST(Tracker, TrackersOnThreadsShareOneModel) {
     FACETRACK_REQUIRE_SHARED();
     const auto frames = clipFrames(10);
     auto run = [&](std::vector<Box>& boxes) {
-        Tracker tracker(shippedModel());
+        Tracker tracker(faceOnly());
         for (const auto& f : frames) {
             const auto r = tracker.process(core::viewOf(f), 0.0);
             boxes.push_back(r.faces.empty() ? Box{} : r.faces[0].box);

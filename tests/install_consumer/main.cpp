@@ -7,14 +7,15 @@
 int main(int argc, char** argv) {
     if (argc != 2) return 2;
     try {
-        const auto model = facetrack::FaceModel::load(argv[1]);
+        facetrack::Models models;
+        models.face = facetrack::FaceModel::load(argv[1]);
         facetrack::TrackerConfig config;
         config.detector.kind = facetrack::DetectorKind::Cascade;
-        facetrack::Tracker tracker(model, config);
+        facetrack::Tracker tracker(models, config);
         std::vector<std::uint8_t> gray(320 * 240, 128);
         const auto result = tracker.process({gray.data(), 320, 240, 320, facetrack::PixelFormat::Gray8}, 0.0);
         std::printf("facetrack %s: %d vertices, %zu faces in a blank frame\n", facetrack::versionString(),
-                    model->vertexCount(), result.faces.size());
+                    models.face->vertexCount(), result.faces.size());
         return result.faces.empty() ? 0 : 1;
     } catch (const facetrack::Error& e) {
         std::fprintf(stderr, "consumer: %s\n", e.what());

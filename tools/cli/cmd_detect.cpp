@@ -1,10 +1,9 @@
 #include "commands.hpp"
+#include "json.hpp"
 #include "media.hpp"
 
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"
-
-#include <nlohmann/json.hpp>
 
 #include <iostream>
 
@@ -24,12 +23,12 @@ int runDetect(const std::vector<std::string>& argv) {
     auto detector = createFaceDetector(detectorConfig(args));
     MediaFrame frame;
     while (reader.next(frame)) {
-        nlohmann::ordered_json faces = nlohmann::ordered_json::array();
+        Json faces = Json::array();
         for (const auto& d : detector->detect(core::viewOf(frame.bgr))) {
-            faces.push_back({{"box", {round2(d.box.x0), round2(d.box.y0), round2(d.box.x1), round2(d.box.y1)}},
+            faces.push_back({{"box", boxJson(d.box)},
                              {"score", round2(d.score)}});
         }
-        std::cout << nlohmann::ordered_json{{"image", frame.source}, {"frame", frame.index}, {"faces", faces}}.dump() << '\n';
+        std::cout << Json{{"image", frame.source}, {"frame", frame.index}, {"faces", faces}}.dump() << '\n';
     }
     return 0;
 }

@@ -1,5 +1,6 @@
 #include "commands.hpp"
 #include "media.hpp"
+#include "../common/faces300w.hpp"
 
 #include "core/image.hpp"
 #include "core/pts.hpp"
@@ -31,15 +32,6 @@ struct Tally {
     int detections = 0;
     double ms = 0.0;
 };
-
-bool matches(const Box& box, const core::Shape2& points) {
-    const Eigen::Vector2f size = points.rowwise().maxCoeff() - points.rowwise().minCoeff();
-    const Eigen::Vector2f centroid = points.rowwise().mean();
-    const bool contains =
-        centroid.x() >= box.x0 && centroid.x() <= box.x1 && centroid.y() >= box.y0 && centroid.y() <= box.y1;
-    const float ratio = std::sqrt(box.width() * box.height()) / std::sqrt(size.x() * size.y());
-    return contains && ratio >= 0.5f && ratio <= 2.f;
-}
 
 void print(const std::string& name, const Tally& t) {
     std::printf("%-22s %6d %8.1f%% %10.2f %8.2f\n", name.c_str(), t.images, 100.0 * t.found / std::max(1, t.images),
@@ -73,7 +65,7 @@ int runEvalDetect(const std::vector<std::string>& argv) {
         const std::chrono::duration<double, std::milli> elapsed = std::chrono::steady_clock::now() - start;
 
         bool found = false;
-        for (const auto& d : detections) found = found || matches(d.box, points);
+        for (const auto& d : detections) found = found || tools::boxMatchesFace(d.box, points);
         const std::string subset = fs::relative(fs::path(image).parent_path(), dir).string();
         for (Tally* t : {&subsets[subset], &all}) {
             t->images += 1;

@@ -18,16 +18,25 @@ int runInfo(const std::vector<std::string>& argv) {
     std::printf("facetrack %s\n", versionString());
     std::printf("model directory: %s\n", modelDirectory().c_str());
 
-    const auto model = FaceModel::loadDefault();
+    const Models models = Models::loadDefault();
+    const auto& model = models.face;
     std::printf("face model: %s (format v%u)\n", model->sourcePath().c_str(), FaceModel::formatVersion());
     std::printf("  %d vertices, %d triangles, %d identity modes (%.1f%% of face-region variance), %zu expressions\n",
                 model->vertexCount(), model->triangleCount(), model->identityCount(),
                 100.0 * model->identityExplainedVariance(), model->expressionNames().size());
     std::printf("  output: ARKit-%d blendshapes (tongueOut unsupported, always 0)\n", kArkitBlendshapeCount);
 
+    if (models.landmarks) {
+        std::printf("landmark model: %s (format v%u)\n  LBF, %d stages, %d trees of depth %d per landmark\n",
+                    models.landmarks->sourcePath().c_str(), LandmarkModel::formatVersion(),
+                    models.landmarks->stageCount(), models.landmarks->treesPerLandmark(), models.landmarks->treeDepth());
+    } else {
+        std::printf("landmark model: not found in %s\n", modelDirectory().c_str());
+    }
+
     TrackerConfig config;
     config.detector = detectorConfig(args);
-    const Tracker tracker(model, config);
+    const Tracker tracker(models, config);
     std::puts("stages:");
     for (const auto& stage : tracker.stages()) {
         std::printf("  %-10s %s\n", stage.name.c_str(), stage.detail.c_str());

@@ -1,11 +1,10 @@
 #include "commands.hpp"
+#include "json.hpp"
 #include "media.hpp"
 
 #include "core/environment.hpp"
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"
-
-#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <fstream>
@@ -23,19 +22,18 @@ Runs the tracker and writes one JSON line per frame (to stdout, or --out):
 A field whose stage is not available in this build is null ('facetrack info' lists the stages).
 With no input: the first webcam, else a clip from ../shared/data/clips.)";
 
-nlohmann::ordered_json vec3(const Vec3& v) { return {v.x, v.y, v.z}; }
+Json vec3(const Vec3& v) { return {v.x, v.y, v.z}; }
 
-nlohmann::ordered_json faceJson(const FaceResult& face) {
-    nlohmann::ordered_json j = {{"tracked", face.tracked},
+Json faceJson(const FaceResult& face) {
+    Json j = {{"tracked", face.tracked},
                         {"confidence", round2(face.confidence)},
-                        {"box", {round2(face.box.x0), round2(face.box.y0), round2(face.box.x1), round2(face.box.y1)}},
+                        {"box", boxJson(face.box)},
                         {"landmarks", nullptr},
                         {"pose", nullptr},
                         {"blendshapes", nullptr},
                         {"gaze", nullptr}};
     if (face.landmarks) {
-        j["landmarks"] = nlohmann::ordered_json::array();
-        for (const auto& p : *face.landmarks) j["landmarks"].push_back({round2(p.x), round2(p.y)});
+        j["landmarks"] = landmarksJson(*face.landmarks);
     }
     if (face.pose) {
         const auto& q = face.pose->rotation;
@@ -44,14 +42,14 @@ nlohmann::ordered_json faceJson(const FaceResult& face) {
                      {"translation_mm", vec3(face.pose->translation_mm)}};
     }
     if (face.expression) {
-        j["blendshapes"] = nlohmann::ordered_json::object();
+        j["blendshapes"] = Json::object();
         for (int k = 0; k < kArkitBlendshapeCount; ++k) {
             j["blendshapes"][std::string(arkitNames()[k])] = face.expression->arkit[k];
         }
     }
     if (face.gaze) {
         auto eye = [](const EyeGaze& e) {
-            return nlohmann::ordered_json{{"direction", vec3(e.direction)}, {"yaw_deg", e.yaw_deg},
+            return Json{{"direction", vec3(e.direction)}, {"yaw_deg", e.yaw_deg},
                                   {"pitch_deg", e.pitch_deg}, {"openness", e.openness}};
         };
         j["gaze"] = {{"left", eye(face.gaze->left)}, {"right", eye(face.gaze->right)}};
@@ -104,7 +102,7 @@ int runTrack(const std::vector<std::string>& argv) {
 
     std::string inputName;
     auto reader = openInput(args, inputName);
-    Tracker tracker(FaceModel::loadDefault(), config);
+    Tracker tracker(Models::loadDefault(), config);
     std::cerr << "facetrack: tracking " << inputName << '\n';
 
     std::ofstream file;
@@ -119,11 +117,11 @@ int runTrack(const std::vector<std::string>& argv) {
     const auto start = std::chrono::steady_clock::now();
     while ((maxFrames < 0 || frames < maxFrames) && reader.next(frame)) {
         const FrameResult result = tracker.process(core::viewOf(frame.bgr), frame.time_s);
-        nlohmann::ordered_json faces = nlohmann::ordered_json::array();
+        Json faces = Json::array();
         for (const auto& face : result.faces) faces.push_back(faceJson(face));
-        nlohmann::ordered_json timings = nlohmann::ordered_json::object();
+        Json timings = Json::object();
         for (const auto& t : result.timings) timings[t.stage] = round2(t.ms);
-        out << nlohmann::ordered_json{{"frame", frames}, {"time_s", round2(frame.time_s)}, {"faces", faces},
+        out << Json{{"frame", frames}, {"time_s", round2(frame.time_s)}, {"faces", faces},
                               {"timings_ms", timings}}
                    .dump()
             << '\n';

@@ -8,6 +8,7 @@
 #include "facetrack/face_model.hpp"
 #include "facetrack/geometry.hpp"
 #include "facetrack/image.hpp"
+#include "facetrack/landmark_model.hpp"
 #include "facetrack/result.hpp"
 #include "facetrack/tracker.hpp"
 #include "facetrack/version.hpp"

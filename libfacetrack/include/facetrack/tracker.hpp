@@ -8,6 +8,7 @@
 #include "facetrack/detector.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/image.hpp"
+#include "facetrack/landmark_model.hpp"
 #include "facetrack/result.hpp"
 
 #include <memory>
@@ -22,6 +23,17 @@ struct StageInfo {
     std::string detail;     ///< what implements it, or why it is not available
 };
 
+/// The models a Tracker uses, loaded once and shared (immutable) by any
+/// number of Trackers on any threads.
+struct Models {
+    std::shared_ptr<const FaceModel> face;            ///< required
+    std::shared_ptr<const LandmarkModel> landmarks;   ///< null: the landmarks stage is not available
+
+    /// The shipped models from modelDirectory(). A missing landmark model
+    /// leaves `landmarks` null (and is logged); any other problem throws Error.
+    static Models loadDefault();
+};
+
 struct TrackerConfig {
     DetectorConfig detector;
     int max_faces = 1;  ///< faces followed at once
@@ -31,8 +43,8 @@ struct TrackerConfig {
 /// use one per thread and share the (immutable) FaceModel between them.
 class Tracker {
 public:
-    /// Throws facetrack::Error when a stage cannot be set up (no detector, null model).
-    Tracker(std::shared_ptr<const FaceModel> model, const TrackerConfig& config = {});
+    /// Throws facetrack::Error when a stage cannot be set up (no detector, no face model).
+    explicit Tracker(Models models, const TrackerConfig& config = {});
     ~Tracker();
     Tracker(Tracker&&) noexcept;
     Tracker& operator=(Tracker&&) noexcept;
@@ -44,7 +56,7 @@ public:
     /// Every pipeline stage, in order, with its availability in this build.
     std::vector<StageInfo> stages() const;
 
-    const FaceModel& model() const;
+    const Models& models() const;
 
 private:
     struct Impl;

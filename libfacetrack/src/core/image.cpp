@@ -49,9 +49,8 @@ cv::Mat toBgr(const ImageView& view) {
     return bgr;
 }
 
-cv::Mat toGray(const ImageView& view) {
+cv::Mat toGray(const ImageView& view, cv::Mat& gray) {
     const cv::Mat src = wrap(view);
-    cv::Mat gray;
     switch (view.format) {
         case PixelFormat::Gray8: return src;
         case PixelFormat::Bgr8: cv::cvtColor(src, gray, cv::COLOR_BGR2GRAY); break;

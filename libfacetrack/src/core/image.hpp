@@ -14,8 +14,9 @@ cv::Mat wrap(const ImageView& view);
 /// The frame as 8-bit BGR: wraps when it already is, else converts.
 cv::Mat toBgr(const ImageView& view);
 
-/// The frame as 8-bit grey: wraps when it already is, else converts.
-cv::Mat toGray(const ImageView& view);
+/// The frame as 8-bit grey: wraps when it already is, else converts into
+/// `buffer` (reused without reallocating when the size stays the same).
+cv::Mat toGray(const ImageView& view, cv::Mat& buffer);
 
 /// A view of an 8-bit BGR or grey cv::Mat (for tools and tests).
 ImageView viewOf(const cv::Mat& mat);

@@ -13,30 +13,12 @@ Eigen::Matrix2f Similarity::linear() const {
     return scale * m;
 }
 
-Shape2 Similarity::apply(const Shape2& shape) const { return (linear() * shape).colwise() + translation; }
-
 Similarity Similarity::inverse() const {
     Similarity inv;
     inv.scale = 1.f / scale;
     inv.angle = -angle;
     inv.translation = -(inv.linear() * translation);
     return inv;
-}
-
-Similarity alignSimilarity(const Shape2& from, const Shape2& to) {
-    if (from.cols() != to.cols() || from.cols() < 2) throw Error("alignSimilarity: shapes of different sizes");
-    const Eigen::Vector2f muFrom = from.rowwise().mean(), muTo = to.rowwise().mean();
-    const Shape2 a = from.colwise() - muFrom, b = to.colwise() - muTo;
-    // For complex numbers z = x + iy the optimum is s e^{i theta} = sum conj(a) b / sum |a|^2.
-    const float dot = (a.array() * b.array()).sum();
-    const float cross = (a.row(0).array() * b.row(1).array() - a.row(1).array() * b.row(0).array()).sum();
-    const float norm = a.squaredNorm();
-    Similarity t;
-    if (norm <= 0.f) return t;
-    t.scale = std::hypot(dot, cross) / norm;
-    t.angle = std::atan2(cross, dot);
-    t.translation = muTo - t.linear() * muFrom;
-    return t;
 }
 
 namespace {

@@ -1,8 +1,11 @@
 #pragma once
 // 2D landmark shapes (2 x N, pixels): similarity alignment, mean shape, NME.
 
+#include "facetrack/error.hpp"
+
 #include <Eigen/Core>
 
+#include <cmath>
 #include <vector>
 
 namespace facetrack::core {
@@ -16,13 +19,36 @@ struct Similarity {
     Eigen::Vector2f translation = Eigen::Vector2f::Zero();
 
     Eigen::Matrix2f linear() const;
-    Shape2 apply(const Shape2& shape) const;
+    template <class S>
+    auto apply(const Eigen::MatrixBase<S>& shape) const {
+        return ((linear() * shape).colwise() + translation).eval();
+    }
     Similarity inverse() const;
 };
 
 /// The similarity that maps `from` onto `to` with least squared error
-/// (Umeyama 1991, without reflection). Both shapes have the same point count.
-Similarity alignSimilarity(const Shape2& from, const Shape2& to);
+/// (Umeyama 1991, without reflection). Both are 2 x N with the same N; with
+/// fixed-size shapes nothing is allocated.
+template <class From, class To>
+Similarity alignSimilarity(const Eigen::MatrixBase<From>& from, const Eigen::MatrixBase<To>& to) {
+    static_assert(From::RowsAtCompileTime == 2 && To::RowsAtCompileTime == 2);
+    if (from.cols() != to.cols() || from.cols() < 2) throw Error("alignSimilarity: shapes of different sizes");
+    const Eigen::Vector2f muFrom = from.rowwise().mean(), muTo = to.rowwise().mean();
+    // With points as complex numbers z, the optimum s e^{i theta} is sum conj(a) b / sum |a|^2.
+    float dot = 0.f, cross = 0.f, norm = 0.f;
+    for (Eigen::Index i = 0; i < from.cols(); ++i) {
+        const Eigen::Vector2f a = from.col(i) - muFrom, b = to.col(i) - muTo;
+        dot += a.dot(b);
+        cross += a.x() * b.y() - a.y() * b.x();
+        norm += a.squaredNorm();
+    }
+    Similarity t;
+    if (!(norm > 0.f)) return t;
+    t.scale = std::hypot(dot, cross) / norm;
+    t.angle = std::atan2(cross, dot);
+    t.translation = muTo - t.linear() * muFrom;
+    return t;
+}
 
 /// Generalised Procrustes mean: each shape aligned by similarity to the
 /// current mean, iterated. The result is centred, with unit RMS radius.

@@ -26,7 +26,8 @@ CascadeDetector::CascadeDetector(const std::string& cascadePath, const DetectorC
 }
 
 std::vector<Detection> CascadeDetector::detect(const ImageView& frame) {
-    const Downscaled small = downscale(core::toGray(frame), config_.detect_width);
+    cv::Mat buffer;
+    const Downscaled small = downscale(core::toGray(frame, buffer), config_.detect_width);
     cv::Mat equalized;
     cv::equalizeHist(small.image, equalized);
     std::vector<cv::Rect> rects;

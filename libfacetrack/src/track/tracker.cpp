@@ -1,9 +1,13 @@
 #include "facetrack/tracker.hpp"
 
+#include "core/environment.hpp"
 #include "core/image.hpp"
 #include "facetrack/error.hpp"
+#include "facetrack/version.hpp"
+#include "landmarks/lbf.hpp"
 
 #include <chrono>
+#include <filesystem>
 
 namespace facetrack {
 
@@ -21,17 +25,30 @@ auto timed(std::vector<StageTiming>& timings, const char* name, Stage&& stage) {
 
 }  // namespace
 
+Models Models::loadDefault() {
+    Models models;
+    models.face = FaceModel::loadDefault();
+    const std::string lbf = modelDirectory() + "/landmarks_lbf.ftm";
+    std::error_code ec;
+    if (std::filesystem::exists(lbf, ec)) {
+        models.landmarks = LandmarkModel::load(lbf);
+    } else {
+        core::log("landmark model " + lbf + " not found: the landmarks stage is not available");
+    }
+    return models;
+}
+
 struct Tracker::Impl {
-    std::shared_ptr<const FaceModel> model;
+    Models models;
     TrackerConfig config;
     std::unique_ptr<FaceDetector> detector;
+    cv::Mat gray;  // reused frame to frame
 };
 
-Tracker::Tracker(std::shared_ptr<const FaceModel> model, const TrackerConfig& config)
-    : impl_(std::make_unique<Impl>()) {
-    if (!model) throw Error("Tracker: no face model given");
+Tracker::Tracker(Models models, const TrackerConfig& config) : impl_(std::make_unique<Impl>()) {
+    if (!models.face) throw Error("Tracker: no face model given");
     if (config.max_faces < 1) throw Error("TrackerConfig::max_faces must be at least 1");
-    impl_->model = std::move(model);
+    impl_->models = std::move(models);
     impl_->config = config;
     impl_->detector = createFaceDetector(config.detector);
 }
@@ -43,23 +60,39 @@ Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 FrameResult Tracker::process(const ImageView& frame, double /*time_s: for the filter stage*/) {
     core::wrap(frame);  // validates the view before any stage touches it
     FrameResult result;
-    const auto detections = timed(result.timings, "detect", [&] { return impl_->detector->detect(frame); });
+    auto detections = timed(result.timings, "detect", [&] { return impl_->detector->detect(frame); });
+    if (detections.size() > static_cast<std::size_t>(impl_->config.max_faces)) {
+        detections.resize(impl_->config.max_faces);
+    }
     for (const auto& d : detections) {
-        if (result.faces.size() >= static_cast<std::size_t>(impl_->config.max_faces)) break;
         FaceResult face;
         face.tracked = false;
         face.confidence = d.score;
         face.box = d.box;
         result.faces.push_back(face);
     }
+
+    if (const auto& lbf = impl_->models.landmarks; lbf && !result.faces.empty()) {
+        timed(result.timings, "landmarks", [&] {
+            const cv::Mat gray = core::toGray(frame, impl_->gray);
+            for (auto& face : result.faces) {
+                const auto init = landmarks::shapeFromBox(lbf->data(), face.box, impl_->detector->kind());
+                face.landmarks = landmarks::toLandmarks68(landmarks::alignLandmarks(lbf->data(), gray, init));
+            }
+            return 0;
+        });
+    }
     return result;
 }
 
 std::vector<StageInfo> Tracker::stages() const {
     const auto& detector = *impl_->detector;
+    const auto& lbf = impl_->models.landmarks;
     return {
         {"detect", true, detector.kind() + " (" + detector.modelPath() + ")"},
-        {"landmarks", false, "not available: LBF landmarks are not built yet"},
+        lbf ? StageInfo{"landmarks", true,
+                        "LBF, " + std::to_string(lbf->stageCount()) + " stages (" + lbf->sourcePath() + ")"}
+            : StageInfo{"landmarks", false, "not available: no landmark model loaded"},
         {"fit", false, "not available: 3D pose and expression fitting is not built yet"},
         {"cnn", false, "not available: the CNN refinement cascade is not built yet"},
         {"gaze", false, "not available: eye gaze is not built yet"},
@@ -67,6 +100,6 @@ std::vector<StageInfo> Tracker::stages() const {
     };
 }
 
-const FaceModel& Tracker::model() const { return *impl_->model; }
+const Models& Tracker::models() const { return impl_->models; }
 
 }  // namespace facetrack

@@ -1,0 +1,44 @@
+#pragma once
+/// \file
+/// The 2D landmark model: local binary features regression (Ren et al.,
+/// "Face Alignment at 3000 FPS", CVPR 2014) with feature points kept inside
+/// the current shape's padded convex hull (Shi, thesis ch. 4). Trained by
+/// tools/train_landmarks; docs/landmarks.md has the details.
+///
+/// Like FaceModel, it is data: load it once, it is immutable, share it.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace facetrack {
+
+namespace landmarks {
+struct LbfModel;
+}
+
+class LandmarkModel {
+public:
+    /// Throws facetrack::Error naming the file when it is missing, truncated,
+    /// corrupt or of another format version.
+    static std::shared_ptr<const LandmarkModel> load(const std::string& path);
+    /// models/landmarks_lbf.ftm in modelDirectory().
+    static std::shared_ptr<const LandmarkModel> loadDefault();
+    static std::uint32_t formatVersion();
+
+    int stageCount() const;
+    int treesPerLandmark() const;
+    int treeDepth() const;
+    const std::string& sourcePath() const;
+
+    /// Internal representation, for facetrack's own stages.
+    const landmarks::LbfModel& data() const { return *data_; }
+
+    LandmarkModel(std::shared_ptr<const landmarks::LbfModel> data, std::string source);
+
+private:
+    std::shared_ptr<const landmarks::LbfModel> data_;
+    std::string source_;
+};
+
+}  // namespace facetrack

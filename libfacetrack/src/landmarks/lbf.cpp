@@ -1,0 +1,49 @@
+#include "landmarks/lbf.hpp"
+
+#include "core/shape2d.hpp"
+
+namespace facetrack::landmarks {
+
+Anchors anchorsOf(const LbfModel& model, const Shape68& shape) {
+    Anchors anchors(2, model.anchorCount());
+    anchors.leftCols<kLandmarks>() = shape;
+    const Eigen::Vector2f centre = shape.rowwise().mean();
+    const float grow = 1.f + model.hull_padding;
+    for (std::size_t h = 0; h < model.hull_indices.size(); ++h) {
+        anchors.col(kLandmarks + static_cast<Eigen::Index>(h)) = centre + grow * (shape.col(model.hull_indices[h]) - centre);
+    }
+    return anchors;
+}
+
+void applyStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gray, Shape68& shape) {
+    const Anchors anchors = anchorsOf(model, shape);
+    Eigen::Matrix<float, 1, 2 * kLandmarks> increment = Eigen::Matrix<float, 1, 2 * kLandmarks>::Zero();
+    traverseStage(model, stage, gray, anchors, [&](int, int row) { increment += stage.regression.row(row); });
+    // The increment is in the mean-shape frame: bring it back with M^{-1}'s linear part.
+    const Eigen::Matrix2f back = core::alignSimilarity(shape, model.mean_shape).inverse().linear();
+    shape += back * Eigen::Map<const Shape68>(increment.data());
+}
+
+Shape68 alignLandmarks(const LbfModel& model, const cv::Mat& gray, Shape68 shape) {
+    for (const auto& stage : model.stages) applyStage(model, stage, gray, shape);
+    return shape;
+}
+
+Landmarks68 toLandmarks68(const Shape68& shape) {
+    Landmarks68 out;
+    for (int i = 0; i < kLandmarks; ++i) out[i] = {shape(0, i), shape(1, i)};
+    return out;
+}
+
+Shape68 shapeFromBox(const LbfModel& model, const Box& box, const std::string& detector) {
+    const BoxPrior* prior = &model.box_priors.front();
+    for (const auto& p : model.box_priors) {
+        if (p.detector == detector) prior = &p;
+    }
+    Shape68 shape = prior->shape;
+    shape.row(0) = shape.row(0).array() * box.width() + box.x0;
+    shape.row(1) = shape.row(1).array() * box.height() + box.y0;
+    return shape;
+}
+
+}  // namespace facetrack::landmarks

@@ -1,0 +1,64 @@
+#pragma once
+// Running an LbfModel: initial shapes and the regression cascade. Nothing here
+// allocates per call.
+
+#include "facetrack/geometry.hpp"
+#include "landmarks/lbf_model.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace facetrack::landmarks {
+
+/// The anchors of a shape: its 68 landmarks, then the padded hull points.
+using Anchors = Eigen::Matrix<float, 2, Eigen::Dynamic, Eigen::ColMajor, 2, 256>;
+
+Anchors anchorsOf(const LbfModel& model, const Shape68& shape);
+
+inline Eigen::Vector2f pointOf(const FeaturePoint& p, const Anchors& anchors) {
+    return p.weights[0] * anchors.col(p.anchors[0]) + p.weights[1] * anchors.col(p.anchors[1]) +
+           (1.f - p.weights[0] - p.weights[1]) * anchors.col(p.anchors[2]);
+}
+
+/// Grey level at the pixel nearest p, clamped to the image.
+inline int pixelAt(const cv::Mat& gray, const Eigen::Vector2f& p) {
+    const int x = std::clamp(static_cast<int>(std::lround(p.x())), 0, gray.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(p.y())), 0, gray.rows - 1);
+    return gray.ptr<std::uint8_t>(y)[x];
+}
+
+/// Calls onLeaf(tree, regressionRow) for the leaf each tree of the stage reaches.
+template <class OnLeaf>
+void traverseStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gray, const Anchors& anchors,
+                   OnLeaf&& onLeaf) {
+    const int splitsPerTree = model.splitsPerTree();
+    const int trees = model.treesPerStage();
+    for (int t = 0; t < trees; ++t) {
+        const Split* tree = stage.splits.data() + static_cast<std::size_t>(t) * splitsPerTree;
+        int node = 0;
+        while (node < splitsPerTree) {
+            const Split& s = tree[node];
+            const int diff = pixelAt(gray, pointOf(s.a, anchors)) - pixelAt(gray, pointOf(s.b, anchors));
+            node = 2 * node + (diff < s.threshold ? 1 : 2);
+        }
+        onLeaf(t, t * model.leavesPerTree() + (node - splitsPerTree));
+    }
+}
+
+/// Applies one stage's increment W^t Phi^t to `shape`, in place.
+void applyStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gray, Shape68& shape);
+
+/// The full cascade from an initial shape. `gray` is 8-bit, one channel.
+Shape68 alignLandmarks(const LbfModel& model, const cv::Mat& gray, Shape68 shape);
+
+/// The shape as the public API's landmark array.
+Landmarks68 toLandmarks68(const Shape68& shape);
+
+/// The initial shape for a detector box: the model's box prior for that
+/// detector kind ("yunet", "cascade"), else its first prior.
+Shape68 shapeFromBox(const LbfModel& model, const Box& box, const std::string& detector);
+
+}  // namespace facetrack::landmarks

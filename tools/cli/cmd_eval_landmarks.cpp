@@ -1,0 +1,166 @@
+#include "ced_plot.hpp"
+#include "commands.hpp"
+#include "json.hpp"
+#include "../common/faces300w.hpp"
+
+#include "core/image.hpp"
+#include "core/pts.hpp"
+#include "facetrack/facetrack.hpp"
+#include "landmarks/lbf.hpp"
+
+#include <dlib/image_processing.h>
+#include <dlib/opencv.h>
+#include <opencv2/face.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+
+namespace fs = std::filesystem;
+
+namespace facetrack::cli {
+
+namespace {
+
+const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
+                                [--facemark FILE] [--dlib FILE|none] [--plot ced.png] [--max-error 0.08]
+Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
+YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
+root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
+Methods, side by side with the same boxes:
+  facetrack LBF            --model (default: the shipped landmarks_lbf.ftm)
+  OpenCV FacemarkLBF       --facemark FILE, a model trained by tools' train_facemark
+  dlib shape_predictor     --dlib FILE (default /usr/share/dlib/shape_predictor_68_face_landmarks.dat)
+Prints per method: faces, mean and median NME (300-W: mean point error over the
+outer-eye-corner distance), failure rate (NME > max error), AUC of the CED up to
+the max error, and ms per face. --plot writes the CED curves as a PNG.)";
+
+using core::Shape2;
+
+/// One landmark method under evaluation.
+struct Method {
+    std::string name;
+    std::function<Shape2(const cv::Mat& bgr, const cv::Mat& gray, const Box& box)> fit;
+    std::vector<double> nmes{};
+    double ms = 0.0;
+
+    Method(std::string n, std::function<Shape2(const cv::Mat&, const cv::Mat&, const Box&)> f)
+        : name(std::move(n)), fit(std::move(f)) {}
+};
+
+Method ourLbf(std::shared_ptr<const LandmarkModel> model) {
+    return {"facetrack LBF", [model](const cv::Mat&, const cv::Mat& gray, const Box& box) {
+                return Shape2(landmarks::alignLandmarks(model->data(), gray,
+                                                        landmarks::shapeFromBox(model->data(), box, "yunet")));
+            }};
+}
+
+Method facemarkLbf(const std::string& path) {
+    if (!fs::exists(path)) throw Error("FacemarkLBF model '" + path + "' does not exist");
+    cv::face::FacemarkLBF::Params params;
+    params.verbose = false;
+    cv::Ptr<cv::face::FacemarkLBF> facemark = cv::face::FacemarkLBF::create(params);
+    facemark->loadModel(path);
+    return {"OpenCV FacemarkLBF", [facemark](const cv::Mat& bgr, const cv::Mat&, const Box& box) {
+                std::vector<cv::Rect> faces = {cv::Rect(cv::Point(cvRound(box.x0), cvRound(box.y0)),
+                                                        cv::Point(cvRound(box.x1), cvRound(box.y1)))};
+                std::vector<std::vector<cv::Point2f>> points;
+                if (!facemark->fit(bgr, faces, points) || points.empty() || points[0].size() != 68) {
+                    throw Error("FacemarkLBF failed to fit a face");
+                }
+                Shape2 s(2, 68);
+                for (int i = 0; i < 68; ++i) s.col(i) = Eigen::Vector2f(points[0][i].x, points[0][i].y);
+                return s;
+            }};
+}
+
+Method dlibShapePredictor(const std::string& path) {
+    auto predictor = std::make_shared<dlib::shape_predictor>();
+    try {
+        dlib::deserialize(path) >> *predictor;
+    } catch (const std::exception& e) {
+        throw Error("cannot load dlib model '" + path + "': " + e.what());
+    }
+    return {"dlib shape_predictor (seen in training)", [predictor](const cv::Mat&, const cv::Mat& gray, const Box& box) {
+                const dlib::cv_image<unsigned char> image(gray);
+                const dlib::full_object_detection d = (*predictor)(
+                    image, dlib::rectangle(std::lround(box.x0), std::lround(box.y0), std::lround(box.x1), std::lround(box.y1)));
+                Shape2 s(2, 68);
+                for (int i = 0; i < 68; ++i) s.col(i) = Eigen::Vector2f(d.part(i).x(), d.part(i).y());
+                return s;
+            }};
+}
+
+}  // namespace
+
+int runEvalLandmarks(const std::vector<std::string>& argv) {
+    const Args args(argv, {"--split", "--model", "--facemark", "--dlib", "--plot", "--max-error", "--yunet"}, {"--help"});
+    if (args.has("--help")) {
+        std::puts(kUsage);
+        return 0;
+    }
+    if (args.positional().size() != 1) throw Error("eval-landmarks needs one DIR (see --help)");
+    const std::string dir = args.positional()[0];
+    const double maxError = args.number("--max-error", 0.08);
+    const auto faces = args.has("--split") ? tools::list300W(dir, tools::parseSplit(args.get("--split")))
+                                           : tools::listAnnotated(dir);
+
+    std::vector<Method> methods;
+    methods.push_back(ourLbf(args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault()));
+    if (args.has("--facemark")) methods.push_back(facemarkLbf(args.get("--facemark")));
+    const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
+    if (dlibPath != "none" && fs::exists(dlibPath)) methods.push_back(dlibShapePredictor(dlibPath));
+
+    DetectorConfig config;
+    config.kind = DetectorKind::YuNet;
+    config.yunet_model = args.get("--yunet");
+    auto detector = createFaceDetector(config);
+
+    int missed = 0;
+    cv::Mat gray;
+    for (std::size_t k = 0; k < faces.size(); ++k) {
+        const cv::Mat bgr = cv::imread(faces[k].image, cv::IMREAD_COLOR);
+        if (bgr.empty()) throw Error("cannot read image '" + faces[k].image + "'");
+        const Shape2 truth = core::readPts(faces[k].pts);
+        if (truth.cols() != 68) throw Error("'" + faces[k].pts + "' does not have 68 points");
+        const auto box = tools::matchingBox(detector->detect(core::viewOf(bgr)), truth);
+        if (!box) {
+            ++missed;
+            continue;
+        }
+        cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+        for (auto& m : methods) {
+            const auto start = std::chrono::steady_clock::now();
+            const Shape2 fitted = m.fit(bgr, gray, *box);
+            m.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+            m.nmes.push_back(core::nme68(fitted, truth));
+        }
+        if ((k + 1) % 50 == 0 || k + 1 == faces.size()) {
+            std::fprintf(stderr, "\r%zu/%zu faces", k + 1, faces.size());
+        }
+    }
+    std::fputc('\n', stderr);
+
+    std::printf("%zu faces, %d without a YuNet box (left out)\n", faces.size(), missed);
+    std::printf("%-40s %6s %9s %9s %10s %9s %9s\n", "method", "faces", "mean NME", "median", "fail@8%", "AUC@8%", "ms/face");
+    std::vector<CedCurve> curves;
+    for (const auto& m : methods) {
+        const ErrorSummary s = summarize(m.nmes, maxError);
+        std::printf("%-40s %6zu %8.2f%% %8.2f%% %9.2f%% %9.4f %9.3f\n", m.name.c_str(), m.nmes.size(), 100 * s.mean,
+                    100 * s.median, 100 * s.failure_rate, s.auc, m.ms / std::max<std::size_t>(1, m.nmes.size()));
+        char label[160];
+        std::snprintf(label, sizeof label, "%s: mean %.2f%%, AUC %.3f", m.name.c_str(), 100 * s.mean, s.auc);
+        curves.push_back({label, m.nmes});
+    }
+    if (args.has("--plot")) {
+        writeCedPlot(args.get("--plot"), curves, maxError,
+                     "CED, " + (args.has("--split") ? args.get("--split") + " split" : dir));
+        std::printf("CED plot: %s\n", args.get("--plot").c_str());
+    }
+    return 0;
+}
+
+}  // namespace facetrack::cli
