@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <filesystem>
 #include <thread>
 
 namespace facetrack {
@@ -98,6 +99,36 @@ TEST(Tracker, TrackersOnThreadsShareOneModel) {
     for (std::size_t i = 0; i < sequential.size(); ++i) {
         EXPECT_EQ(a[i].x0, sequential[i].x0);
         EXPECT_EQ(b[i].y1, sequential[i].y1);
+    }
+}
+
+}  // namespace
+}  // namespace facetrack
+
+namespace facetrack {
+namespace {
+
+TEST(Tracker, LandmarksStageFillsLandmarksWhenItsModelIsShipped) {
+    FACETRACK_REQUIRE_SHARED();
+    if (!std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm")) {
+        GTEST_SKIP() << "models/landmarks_lbf.ftm is not shipped";
+    }
+    Tracker tracker(Models::loadDefault());
+    EXPECT_TRUE(tracker.stages()[1].available);
+    for (const auto& frame : clipFrames(3)) {
+        const FrameResult result = tracker.process(core::viewOf(frame), 0.0);
+        ASSERT_EQ(result.faces.size(), 1u);
+        ASSERT_TRUE(result.faces[0].landmarks.has_value());
+        const Box& box = result.faces[0].box;
+        const float margin = 0.25f * box.width();
+        for (const auto& p : *result.faces[0].landmarks) {
+            EXPECT_GT(p.x, box.x0 - margin);
+            EXPECT_LT(p.x, box.x1 + margin);
+            EXPECT_GT(p.y, box.y0 - margin);
+            EXPECT_LT(p.y, box.y1 + margin);
+        }
+        ASSERT_EQ(result.timings.size(), 2u);
+        EXPECT_EQ(result.timings[1].stage, "landmarks");
     }
 }
 

@@ -23,11 +23,12 @@ inline Eigen::Vector2f pointOf(const FeaturePoint& p, const Anchors& anchors) {
            (1.f - p.weights[0] - p.weights[1]) * anchors.col(p.anchors[2]);
 }
 
-/// Grey level at the pixel nearest p, clamped to the image.
+/// Grey level at the pixel nearest p, clamped to the image. (Clamping before
+/// rounding keeps the cast in range, also for NaN: it compares false and clamps.)
 inline int pixelAt(const cv::Mat& gray, const Eigen::Vector2f& p) {
-    const int x = std::clamp(static_cast<int>(std::lround(p.x())), 0, gray.cols - 1);
-    const int y = std::clamp(static_cast<int>(std::lround(p.y())), 0, gray.rows - 1);
-    return gray.ptr<std::uint8_t>(y)[x];
+    const float fx = p.x() > 0.f ? std::min(p.x(), static_cast<float>(gray.cols - 1)) : 0.f;
+    const float fy = p.y() > 0.f ? std::min(p.y(), static_cast<float>(gray.rows - 1)) : 0.f;
+    return gray.ptr<std::uint8_t>(static_cast<int>(fy + 0.5f))[static_cast<int>(fx + 0.5f)];
 }
 
 /// Calls onLeaf(tree, regressionRow) for the leaf each tree of the stage reaches.
