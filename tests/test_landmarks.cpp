@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 
 // Mean NME the shipped model must stay under on the first 40 lfpw test faces
 // (measured value in docs/benchmarks.md, plus a margin for other machines).
-constexpr double kShippedNmeBound = 0.06;
+constexpr double kShippedNmeBound = 0.065;
 
 /// A drawn "face": 68 points on an ellipse-and-features template, randomly
 /// placed, scaled, rotated and deformed, rendered as dots on a textured background.

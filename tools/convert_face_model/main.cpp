@@ -14,6 +14,7 @@
 // - eyeballs: a least-squares sphere through each sclera, the iris centroid
 //   direction as the optical axis, and the radius of the flat iris disc.
 
+#include "../common/tool_main.hpp"
 #include "core/environment.hpp"
 #include "facetrack/error.hpp"
 #include "ict_facekit.hpp"
@@ -274,11 +275,4 @@ int run(int argc, char** argv) {
 }  // namespace
 }  // namespace facetrack::tools
 
-int main(int argc, char** argv) {
-    try {
-        return facetrack::tools::run(argc, argv);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "convert_face_model: %s\n", e.what());
-        return 1;
-    }
-}
+int main(int argc, char** argv) { return facetrack::tools::runTool("convert_face_model", facetrack::tools::run, argc, argv); }

@@ -5,6 +5,7 @@
 //
 //   train_facemark [--data ../shared/data/faces300w] [--out facemark_lbf.yaml]
 
+#include "../common/tool_main.hpp"
 #include "../cli/args.hpp"
 #include "../common/faces300w.hpp"
 #include "core/environment.hpp"
@@ -73,11 +74,4 @@ int run(int argc, char** argv) {
 }  // namespace
 }  // namespace facetrack::tools
 
-int main(int argc, char** argv) {
-    try {
-        return facetrack::tools::run(argc, argv);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "train_facemark: %s\n", e.what());
-        return 1;
-    }
-}
+int main(int argc, char** argv) { return facetrack::tools::runTool("train_facemark", facetrack::tools::run, argc, argv); }

@@ -6,6 +6,7 @@
 // Long: run it under nohup (docs/landmarks.md). After each stage it writes
 // OUT.partial; --resume continues from there. Deterministic for a given seed.
 
+#include "../common/tool_main.hpp"
 #include "../cli/args.hpp"
 #include "../common/faces300w.hpp"
 #include "core/environment.hpp"
@@ -291,11 +292,4 @@ int run(int argc, char** argv) {
 }  // namespace
 }  // namespace facetrack::tools
 
-int main(int argc, char** argv) {
-    try {
-        return facetrack::tools::run(argc, argv);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "\ntrain_landmarks: %s\n", e.what());
-        return 1;
-    }
-}
+int main(int argc, char** argv) { return facetrack::tools::runTool("train_landmarks", facetrack::tools::run, argc, argv); }

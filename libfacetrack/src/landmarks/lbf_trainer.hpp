@@ -31,7 +31,7 @@ struct LbfTrainingOptions {
     /// Feature sampling radius per stage, in units of the mean shape's
     /// outer-eye-corner distance; shrinks stage by stage. The last value
     /// repeats for any further stages.
-    std::vector<float> radii = {0.5f, 0.35f, 0.25f, 0.18f, 0.13f, 0.1f};
+    std::vector<float> radii = {0.5f, 0.35f, 0.25f, 0.18f, 0.13f, 0.1f, 0.08f};
     float hull_padding = 0.1f;   ///< feature points stay inside the hull grown by this factor
     int pool_size = 400;         ///< candidate feature points per landmark and stage
     int split_candidates = 300;  ///< point pairs tried at each split
