@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <sstream>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace facetrack {
 namespace {
@@ -22,7 +23,11 @@ struct CliRun {
 };
 
 CliRun runCli(const std::string& args) {
-    const std::string errFile = "/tmp/facetrack_test_cli_stderr.txt";
+    // One file per process and call: ctest runs the CLI tests in parallel processes.
+    static int calls = 0;
+    const std::string errFile = (std::filesystem::temp_directory_path() /
+                                 ("facetrack_cli_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(calls++)))
+                                    .string();
     const std::string cmd = std::string(FACETRACK_CLI) + " " + args + " 2>" + errFile;
     CliRun run;
     FILE* pipe = popen(cmd.c_str(), "r");
@@ -33,6 +38,7 @@ CliRun runCli(const std::string& args) {
     run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     std::ifstream err(errFile);
     run.err.assign(std::istreambuf_iterator<char>(err), {});
+    std::filesystem::remove(errFile);
     return run;
 }
 
