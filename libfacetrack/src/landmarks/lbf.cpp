@@ -2,6 +2,8 @@
 
 #include "core/shape2d.hpp"
 
+#include <array>
+
 namespace facetrack::landmarks {
 
 Anchors anchorsOf(const LbfModel& model, const Shape68& shape) {
@@ -17,8 +19,22 @@ Anchors anchorsOf(const LbfModel& model, const Shape68& shape) {
 
 void applyStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gray, Shape68& shape) {
     const Anchors anchors = anchorsOf(model, shape);
+    // Leaves first, then the rows: the rows are scattered over megabytes, so
+    // each is prefetched a few rows ahead of the sum.
+    constexpr int kMaxTrees = kLandmarks * 64;
+    std::array<int, kMaxTrees> rows;
+    int count = 0;
+    traverseStage(model, stage, gray, anchors, [&](int, int row) { rows[count++] = row; });
+    constexpr int kAhead = 4;
+    for (int k = 0; k < std::min(count, kAhead); ++k) __builtin_prefetch(stage.regression.row(rows[k]).data());
     Eigen::Matrix<float, 1, 2 * kLandmarks> increment = Eigen::Matrix<float, 1, 2 * kLandmarks>::Zero();
-    traverseStage(model, stage, gray, anchors, [&](int, int row) { increment += stage.regression.row(row); });
+    for (int k = 0; k < count; ++k) {
+        if (k + kAhead < count) {
+            const float* next = stage.regression.row(rows[k + kAhead]).data();
+            for (int line = 0; line < 2 * kLandmarks * 4; line += 64) __builtin_prefetch(reinterpret_cast<const char*>(next) + line);
+        }
+        increment += stage.regression.row(rows[k]);
+    }
     // The increment is in the mean-shape frame: bring it back with M^{-1}'s linear part.
     const Eigen::Matrix2f back = core::alignSimilarity(shape, model.mean_shape).inverse().linear();
     shape += back * Eigen::Map<const Shape68>(increment.data());

@@ -90,6 +90,8 @@ struct PoolSplit {
 
 LbfModel prepareLbfModel(const std::vector<TrainingImage>& images, const LbfTrainingOptions& options) {
     if (images.empty()) throw Error("no training images");
+    if (options.trees_per_landmark < 1 || options.trees_per_landmark > 64) throw Error("trees per landmark must be 1..64");
+    if (options.tree_depth < 1 || options.tree_depth > 12) throw Error("tree depth must be 1..12");
     std::vector<core::Shape2> shapes;
     for (const auto& im : images) shapes.emplace_back(im.truth);
     LbfModel model;
