@@ -1,6 +1,7 @@
 #include "faces300w.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/environment.hpp"
 #include "facetrack/error.hpp"
 
 #include <algorithm>
@@ -44,6 +45,13 @@ std::optional<Box> matchingBox(const std::vector<Detection>& detections, const c
         }
     }
     return best;
+}
+
+std::string faces300wRoot(const std::string& given) {
+    if (!given.empty()) return given;
+    const std::string shared = core::sharedDirectory();
+    if (shared.empty()) throw Error("no --data given and ../shared not found");
+    return shared + "/data/faces300w";
 }
 
 Split parseSplit(const std::string& name) {

@@ -24,7 +24,10 @@ struct AnnotatedImage {
 
 enum class Split { Train, Validation, Test };
 
-Split parseSplit(const std::string& name);  ///< "train", "validation", "test"
+Split parseSplit(const std::string& name);
+
+/// `given` when not empty, else ../shared/data/faces300w; throws Error when neither exists.
+std::string faces300wRoot(const std::string& given);  ///< "train", "validation", "test"
 
 /// Every annotated image of the split, sorted by path. Throws Error when the
 /// folder is missing or the split is empty.

@@ -40,9 +40,7 @@ int run(int argc, char** argv) {
         return 0;
     }
     setLogHandler({});
-    const std::string shared = core::sharedDirectory();
-    const std::string data = args.get("--data", shared.empty() ? "" : shared + "/data/faces300w");
-    if (data.empty()) throw Error("no --data given and ../shared not found");
+    const std::string data = faces300wRoot(args.get("--data"));
     const std::string out = args.get("--out", "facemark_lbf.yaml");
 
     DetectorConfig config;

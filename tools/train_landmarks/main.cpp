@@ -1,7 +1,7 @@
 // train_landmarks: trains the LBF landmark model on the 300-W training split.
 //
 //   train_landmarks [--data ../shared/data/faces300w] [--out models/landmarks_lbf.ftm]
-//                   [--stages 5] [--trees 6] [--depth 5] [--inits 6] [--threads 2] [--seed 1] [--resume]
+//                   [--stages 7] [--trees 4] [--depth 5] [--inits 6] [--threads 2] [--seed 1] [--ridge 15000] [--resume]
 //
 // Long: run it under nohup (docs/landmarks.md). After each stage it writes
 // OUT.partial; --resume continues from there. Deterministic for a given seed.
@@ -141,14 +141,12 @@ int run(int argc, char** argv) {
                          {"--data", "--out", "--stages", "--trees", "--depth", "--inits", "--threads", "--seed", "--ridge"},
                          {"--resume", "--help"});
     if (args.has("--help")) {
-        std::puts("usage: train_landmarks [--data DIR] [--out FILE] [--stages 5] [--trees 6] [--depth 5] [--inits 6]\n"
-                  "                       [--threads 2] [--seed 1] [--ridge 50] [--resume]");
+        std::puts("usage: train_landmarks [--data DIR] [--out FILE] [--stages 7] [--trees 4] [--depth 5] [--inits 6]\n"
+                  "                       [--threads 2] [--seed 1] [--ridge 15000] [--resume]");
         return 0;
     }
     setLogHandler({});
-    const std::string shared = core::sharedDirectory();
-    const std::string data = args.get("--data", shared.empty() ? "" : shared + "/data/faces300w");
-    if (data.empty()) throw Error("no --data given and ../shared not found");
+    const std::string data = faces300wRoot(args.get("--data"));
     const std::string out = args.get("--out", "models/landmarks_lbf.ftm");
     landmarks::LbfTrainingOptions o;
     o.stages = static_cast<int>(args.number("--stages", o.stages));

@@ -25,8 +25,8 @@ struct TrainingSample {
 };
 
 struct LbfTrainingOptions {
-    int stages = 5;
-    int trees_per_landmark = 6;
+    int stages = 7;
+    int trees_per_landmark = 4;
     int tree_depth = 5;
     /// Feature sampling radius per stage, in units of the mean shape's
     /// outer-eye-corner distance; shrinks stage by stage. The last value
@@ -36,7 +36,7 @@ struct LbfTrainingOptions {
     int pool_size = 400;         ///< candidate feature points per landmark and stage
     int split_candidates = 300;  ///< point pairs tried at each split
     float tree_sample_fraction = 0.4f;  ///< share of the samples each tree is grown on
-    float ridge = 50.f;          ///< L2 weight of the global regression
+    float ridge = 15000.f;       ///< L2 weight of the global regression (docs/benchmarks.md: it matters most)
     int ridge_epochs = 4;        ///< block coordinate descent sweeps
     int threads = 2;
     std::uint64_t seed = 1;
