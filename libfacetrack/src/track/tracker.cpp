@@ -42,7 +42,8 @@ struct Tracker::Impl {
     Models models;
     TrackerConfig config;
     std::unique_ptr<FaceDetector> detector;
-    cv::Mat gray;  // reused frame to frame
+    std::string detector_kind;  // picks the landmark model's box prior; fixed per tracker
+    cv::Mat gray;               // reused frame to frame
 };
 
 Tracker::Tracker(Models models, const TrackerConfig& config) : impl_(std::make_unique<Impl>()) {
@@ -51,6 +52,7 @@ Tracker::Tracker(Models models, const TrackerConfig& config) : impl_(std::make_u
     impl_->models = std::move(models);
     impl_->config = config;
     impl_->detector = createFaceDetector(config.detector);
+    impl_->detector_kind = impl_->detector->kind();
 }
 
 Tracker::~Tracker() = default;
@@ -76,7 +78,7 @@ FrameResult Tracker::process(const ImageView& frame, double /*time_s: for the fi
         timed(result.timings, "landmarks", [&] {
             const cv::Mat gray = core::toGray(frame, impl_->gray);
             for (auto& face : result.faces) {
-                const auto init = landmarks::shapeFromBox(lbf->data(), face.box, impl_->detector->kind());
+                const auto init = landmarks::shapeFromBox(lbf->data(), face.box, impl_->detector_kind);
                 face.landmarks = landmarks::toLandmarks68(landmarks::alignLandmarks(lbf->data(), gray, init));
             }
             return 0;
