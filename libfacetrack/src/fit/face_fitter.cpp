@@ -1,0 +1,239 @@
+#include "fit/face_fitter.hpp"
+
+#include "facetrack/error.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace facetrack::fit {
+
+namespace {
+
+constexpr int kJaw = model::kContourLandmarkCount;
+
+ceres::Solver::Options solverOptions(int iterations, ceres::LinearSolverType solver) {
+    ceres::Solver::Options options;
+    options.linear_solver_type = solver;
+    options.max_num_iterations = iterations;
+    options.num_threads = 1;
+    options.logging_type = ceres::SILENT;
+    options.minimizer_progress_to_stdout = false;
+    options.function_tolerance = 1e-7;
+    options.gradient_tolerance = 1e-8;
+    options.parameter_tolerance = 1e-6;
+    return options;
+}
+
+void boundExpressions(ceres::Problem& problem, double* expression, int count) {
+    for (int k = 0; k < count; ++k) {
+        problem.SetParameterLowerBound(expression, k, 0.0);
+        problem.SetParameterUpperBound(expression, k, 1.0);
+    }
+}
+
+Eigen::Matrix<double, 6, 1> poseTemporalWeights(const FitSettings& s) {
+    Eigen::Matrix<double, 6, 1> w;
+    w << Eigen::Vector3d::Constant(s.rotation_temporal), Eigen::Vector3d::Constant(s.translation_temporal);
+    return w;
+}
+
+Eigen::Vector3d transformed(const FaceParams& params, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& x) {
+    return rotation * x + params.translation();
+}
+
+}  // namespace
+
+double eyeCornerDistance(const Landmarks2d& points) { return (points.col(36) - points.col(45)).norm(); }
+
+Eigen::Matrix3Xd slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression) {
+    Eigen::Matrix3Xd x = base;
+    if (expression.size() == basis.expressionCount() && expression.size() > 0) {
+        const Eigen::VectorXd offsets = basis.expression * expression;
+        x += Eigen::Map<const Eigen::Matrix3Xd>(offsets.data(), 3, basis.slotCount());
+    }
+    return x;
+}
+
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                             const FaceParams& params, const ContourSlots& contour) {
+    const Eigen::Matrix3Xd x = slotPositions(basis, base, params.expression);
+    const Eigen::Matrix3d rotation = rotationOf(params.omega());
+    Landmarks2d out;
+    for (int i = 0; i < model::kLandmarkCount; ++i) {
+        const int slot = i < kJaw ? contour[i] : basis.landmark_slots[i];
+        out.col(i) = camera.project<double>(transformed(params, rotation, x.col(slot)));
+    }
+    return out;
+}
+
+ContourSlots selectContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                           const FaceParams& params) {
+    const Eigen::Matrix3Xd x = slotPositions(basis, base, params.expression);
+    const Eigen::Matrix3d rotation = rotationOf(params.omega());
+    auto projected = [&](int slot) { return camera.project<double>(transformed(params, rotation, x.col(slot))); };
+    ContourSlots chosen{};
+    for (int i = 0; i < kJaw; ++i) {
+        const Eigen::Vector3d own = x.col(basis.landmark_slots[i]);
+        const Eigen::Vector2d origin = projected(basis.landmark_slots[i]);
+        const Eigen::Vector2d outward =
+            (camera.project<double>(transformed(params, rotation, own + basis.contour_outward[i])) - origin).normalized();
+        chosen[i] = basis.landmark_slots[i];
+        double best = -std::numeric_limits<double>::infinity();
+        for (const int slot : basis.contour_slots[i]) {
+            const double reach = (projected(slot) - origin).dot(outward);
+            if (reach > best) {
+                best = reach;
+                chosen[i] = slot;
+            }
+        }
+    }
+    return chosen;
+}
+
+FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings& settings)
+    : basis_(std::move(basis)), settings_(settings) {
+    if (!basis_) throw Error("FaceFitter: no fit basis");
+    const int expressions = basis_->expressionCount();
+    base_ = basis_->neutral;
+    pose_.setZero();
+    previous_pose_.setZero();
+    expression_ = previous_expression_ = Eigen::VectorXd::Zero(expressions);
+    loss_ = std::make_unique<ceres::HuberLoss>(settings_.huber);
+
+    ceres::Problem::Options options;
+    options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_ = std::make_unique<ceres::Problem>(options);
+    const LandmarkCost::Inputs inputs{basis_.get(), &base_, &camera_, &scale_};
+    for (int i = 0; i < model::kLandmarkCount; ++i) {
+        landmark_costs_[i] = new LandmarkCost(inputs, observed_.col(i).data(), basis_->landmark_slots[i], false);
+        problem_->AddResidualBlock(landmark_costs_[i], loss_.get(), pose_.data(), expression_.data());
+    }
+    expression_l2_ = new PullTowards(expressions, nullptr);
+    expression_l2_->setWeight(settings_.expression_l2);
+    problem_->AddResidualBlock(expression_l2_, nullptr, expression_.data());
+    expression_temporal_ = new PullTowards(expressions, previous_expression_.data());
+    problem_->AddResidualBlock(expression_temporal_, nullptr, expression_.data());
+    pose_temporal_ = new PullTowards(6, previous_pose_.data());
+    problem_->AddResidualBlock(pose_temporal_, nullptr, pose_.data());
+    boundExpressions(*problem_, expression_.data(), expressions);
+}
+
+FaceFitter::~FaceFitter() = default;
+
+void FaceFitter::setIdentity(const Eigen::VectorXd& identity) {
+    if (identity.size() != 0 && identity.size() != basis_->identityCount()) {
+        throw Error("FaceFitter: identity has " + std::to_string(identity.size()) + " coefficients, the model " +
+                    std::to_string(basis_->identityCount()));
+    }
+    identity_ = identity;
+    base_ = shapeWithIdentity(*basis_, identity_);
+}
+
+FaceParams FaceFitter::initialParams(const Landmarks2d& observed) const {
+    // Frontal, rolled like the eye line, at the depth where the model's eye
+    // corners are as far apart as the observed ones, centred on the inner points.
+    FaceParams p;
+    p.expression = Eigen::VectorXd::Zero(basis_->expressionCount());
+    const Eigen::Vector2d eyeLine = observed.col(45) - observed.col(36);
+    const double modelEyes = (base_.col(basis_->landmark_slots[36]) - base_.col(basis_->landmark_slots[45])).norm();
+    const double depth = camera_.fx * modelEyes / std::max(eyeLine.norm(), 1.0);
+    Eigen::Vector2d centre2 = Eigen::Vector2d::Zero();
+    Eigen::Vector3d centre3 = Eigen::Vector3d::Zero();
+    for (int i = kJaw; i < model::kLandmarkCount; ++i) {
+        centre2 += observed.col(i);
+        centre3 += base_.col(basis_->landmark_slots[i]);
+    }
+    const double n = model::kLandmarkCount - kJaw;
+    centre2 /= n;
+    centre3 /= n;
+    p.pose.head<3>() = Eigen::Vector3d(0, 0, std::atan2(eyeLine.y(), eyeLine.x()));
+    const Eigen::Vector3d rotatedCentre = rotationOf(p.omega()) * centre3;
+    p.pose.tail<3>() = Eigen::Vector3d((centre2.x() - camera_.cx) * depth / camera_.fx,
+                                       (centre2.y() - camera_.cy) * depth / camera_.fy, depth) -
+                       Eigen::Vector3d(rotatedCentre.x(), rotatedCentre.y(), 0.0);
+    return p;
+}
+
+int FaceFitter::solve(int iterations) {
+    ceres::Solver::Summary summary;
+    ceres::Solve(solverOptions(iterations, ceres::DENSE_NORMAL_CHOLESKY), problem_.get(), &summary);
+    return static_cast<int>(summary.iterations.size());
+}
+
+FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm) {
+    FitReport report;
+    report.residual = std::numeric_limits<double>::infinity();
+    if (!observed.allFinite()) return report;
+    camera_ = camera;
+    observed_ = observed;
+    scale_ = std::max(eyeCornerDistance(observed), 1.0);
+    if (!warm || params.expression.size() != basis_->expressionCount()) {
+        params = initialParams(observed);
+        warm = false;
+    }
+    pose_ = previous_pose_ = params.pose;
+    expression_ = previous_expression_ = params.expression;
+    expression_temporal_->setWeight(warm ? settings_.expression_temporal : 0.0);
+    pose_temporal_->setWeights(warm ? poseTemporalWeights(settings_) : Eigen::VectorXd::Zero(6));
+
+    auto current = [&] { return FaceParams{pose_, expression_}; };
+    auto chooseContour = [&] {
+        report.contour = selectContour(*basis_, base_, camera_, current());
+        for (int i = 0; i < kJaw; ++i) landmark_costs_[i]->setSlot(report.contour[i]);
+    };
+    if (!warm) {
+        // Pose alone first: from the frontal start, expressions would absorb the rotation.
+        chooseContour();
+        problem_->SetParameterBlockConstant(expression_.data());
+        report.iterations += solve(settings_.cold_iterations);
+        problem_->SetParameterBlockVariable(expression_.data());
+    }
+    for (int round = 0; round < (warm ? 1 : 2); ++round) {
+        chooseContour();
+        report.iterations += solve(warm ? settings_.warm_iterations : settings_.cold_iterations);
+    }
+    params = current();
+    const Landmarks2d fitted = projectLandmarks(*basis_, base_, camera_, params, report.contour);
+    report.residual = std::sqrt((fitted - observed).colwise().squaredNorm().mean()) / scale_;
+    if (!params.pose.allFinite() || !params.expression.allFinite()) {
+        report.residual = std::numeric_limits<double>::infinity();
+    }
+    return report;
+}
+
+Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<CalibrationFrame>& frames,
+                                  const FitSettings& settings) {
+    const int expressions = basis.expressionCount();
+    Eigen::VectorXd identity = Eigen::VectorXd::Zero(basis.identityCount());
+    if (frames.empty()) return identity;
+
+    ceres::HuberLoss loss(settings.huber);
+    ceres::Problem::Options options;
+    options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(options);
+    std::vector<double> scales(frames.size());
+    auto* identityPrior = new PullTowards(basis.identityCount(), nullptr);
+    identityPrior->setWeight(settings.identity_prior * static_cast<double>(frames.size()));
+    problem.AddResidualBlock(identityPrior, nullptr, identity.data());
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+        auto& frame = frames[f];
+        if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
+        scales[f] = std::max(eyeCornerDistance(frame.observed), 1.0);
+        const LandmarkCost::Inputs inputs{&basis, &basis.neutral, &frame.camera, &scales[f]};
+        for (int i = 0; i < model::kLandmarkCount; ++i) {
+            const int slot = i < kJaw ? frame.contour[i] : basis.landmark_slots[i];
+            problem.AddResidualBlock(new LandmarkCost(inputs, frame.observed.col(i).data(), slot, true), &loss,
+                                     frame.params.pose.data(), frame.params.expression.data(), identity.data());
+        }
+        auto* l2 = new PullTowards(expressions, nullptr);
+        l2->setWeight(settings.expression_l2);
+        problem.AddResidualBlock(l2, nullptr, frame.params.expression.data());
+        boundExpressions(problem, frame.params.expression.data(), expressions);
+    }
+    ceres::Solver::Summary summary;
+    ceres::Solve(solverOptions(50, ceres::DENSE_SCHUR), &problem, &summary);
+    if (!identity.allFinite()) return Eigen::VectorXd::Zero(basis.identityCount());
+    return identity;
+}
+
+}  // namespace facetrack::fit

@@ -1,0 +1,123 @@
+#pragma once
+// Fitting pose, expression and (over a window of frames) identity to 68 2D
+// landmarks, with Ceres (thesis ch. 4; Cao et al.'s "3D shape regression"
+// fitting without the depth term):
+//
+//   min  sum_i rho(|pi(R X_i(a, b) + t) - u_i|^2 / s^2)
+//        + w_l2 |b|^2 + w_t |b - b_prev|^2 + |W_p (p - p_prev)|^2,   b in [0, 1]
+//
+// over the pose p = (omega, t) and expression b, with u_i the landmarks, s the
+// eye-corner distance in pixels, rho a Huber loss. The 17 jaw landmarks are not
+// tied to fixed vertices: each is matched to the silhouette vertex among its
+// contour candidates (selectContour), re-chosen as the pose changes.
+
+#include "fit/camera.hpp"
+#include "fit/costs.hpp"
+#include "fit/fit_basis.hpp"
+#include "fit/pose.hpp"
+
+#include <array>
+#include <memory>
+#include <vector>
+
+namespace facetrack::fit {
+
+using Landmarks2d = Eigen::Matrix<double, 2, model::kLandmarkCount>;
+using ContourSlots = std::array<int, model::kContourLandmarkCount>;
+
+struct FitSettings {
+    double huber = 0.05;                ///< robust loss scale, in eye-corner distances
+    double expression_l2 = 1e-3;        ///< w_l2
+    double expression_temporal = 5e-3;  ///< w_t
+    double rotation_temporal = 1e-3;    ///< per rad^2
+    double translation_temporal = 1e-5; ///< per cm^2
+    double identity_prior = 2e-4;             ///< w_id |a|^2 during identity calibration
+    int cold_iterations = 40;
+    int warm_iterations = 6;
+};
+
+struct FitReport {
+    double residual = 0.0;  ///< RMS landmark distance after the fit, in eye-corner distances
+    ContourSlots contour{};
+    int iterations = 0;
+};
+
+/// Outer-eye-corner distance (points 36 and 45), the 300-W face size.
+double eyeCornerDistance(const Landmarks2d& points);
+
+/// X_s = base_s + D_s b for every slot (3 x S, frontal frame, cm).
+Eigen::Matrix3Xd slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression);
+
+/// The 68 landmarks the fitted face projects to, jaw points at `contour`.
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                             const FaceParams& params, const ContourSlots& contour);
+
+/// For each jaw landmark, the candidate on the silhouette: the one whose
+/// projection reaches furthest along the image direction of the landmark's
+/// outward axis (FitBasis::contour_outward). A path swept across the jaw
+/// reaches that extreme where it turns out of view.
+ContourSlots selectContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                           const FaceParams& params);
+
+/// Fits one face frame by frame. Holds a Ceres problem that is built once and
+/// re-solved, so that a warm fit allocates little. Not copyable: the problem
+/// points into the fitter.
+class FaceFitter {
+public:
+    FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings& settings);
+    ~FaceFitter();
+    FaceFitter(const FaceFitter&) = delete;
+    FaceFitter& operator=(const FaceFitter&) = delete;
+
+    /// Identity coefficients a (empty: the mean face).
+    void setIdentity(const Eigen::VectorXd& identity);
+    const Eigen::VectorXd& identity() const { return identity_; }
+    const Eigen::Matrix3Xd& base() const { return base_; }
+    const FitBasis& basis() const { return *basis_; }
+    const FitSettings& settings() const { return settings_; }
+
+    /// Fits `params` to `observed` (pixels). Cold: params are initialised from
+    /// the points. Warm: params hold the previous frame's fit, the start and
+    /// the target of the temporal prior.
+    FitReport fit(const Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm);
+
+private:
+    FaceParams initialParams(const Landmarks2d& observed) const;
+    int solve(int iterations);
+
+    std::shared_ptr<const FitBasis> basis_;
+    FitSettings settings_;
+    Eigen::VectorXd identity_;
+    Eigen::Matrix3Xd base_;
+
+    // What the costs read through pointers.
+    Camera camera_;
+    Landmarks2d observed_ = Landmarks2d::Zero();
+    double scale_ = 1.0;
+    Eigen::Matrix<double, 6, 1> pose_, previous_pose_;
+    Eigen::VectorXd expression_, previous_expression_;
+
+    std::unique_ptr<ceres::HuberLoss> loss_;
+    std::unique_ptr<ceres::Problem> problem_;
+    std::array<LandmarkCost*, model::kLandmarkCount> landmark_costs_{};
+    PullTowards* expression_l2_ = nullptr;
+    PullTowards* expression_temporal_ = nullptr;
+    PullTowards* pose_temporal_ = nullptr;
+};
+
+/// One frame of the identity calibration window.
+struct CalibrationFrame {
+    Camera camera;
+    Landmarks2d observed;
+    FaceParams params;  ///< start; refined in place
+    ContourSlots contour{};
+};
+
+/// The identity a shared by all frames, fitted jointly with each frame's pose
+/// and expression (w_id |a|^2 keeps it near the mean; the contour stays as
+/// given). Frames should show varied poses: depth and identity trade off in a
+/// single view.
+Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<CalibrationFrame>& frames,
+                                  const FitSettings& settings);
+
+}  // namespace facetrack::fit

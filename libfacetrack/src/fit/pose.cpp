@@ -1,0 +1,57 @@
+#include "fit/pose.hpp"
+
+#include "fit/fit_basis.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace facetrack::fit {
+
+// Relative to the frontal frame, R(omega) = Rz(roll) Rx(pitch) Ry(-yaw) about
+// the camera axes (x right, y down, z forward): yaw first, then pitch, then roll.
+// The signs make pitch > 0 chin down, yaw > 0 a turn to the image's right and
+// roll > 0 a clockwise tilt in the image (y points down).
+
+namespace {
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+}
+
+Eigen::Matrix3d rotationOf(const Eigen::Vector3d& omega) {
+    const double angle = omega.norm();
+    if (angle < 1e-12) return Eigen::Matrix3d::Identity();
+    return Eigen::AngleAxisd(angle, omega / angle).toRotationMatrix();
+}
+
+Eigen::Vector3d eulerDegrees(const Eigen::Vector3d& omega) {
+    const Eigen::Matrix3d r = rotationOf(omega);
+    const double pitch = std::asin(std::clamp(r(2, 1), -1.0, 1.0));
+    const double yaw = -std::atan2(-r(2, 0), r(2, 2));
+    const double roll = std::atan2(-r(0, 1), r(1, 1));
+    return Eigen::Vector3d(pitch, yaw, roll) / kDeg;
+}
+
+Eigen::Vector3d omegaFromEuler(const Eigen::Vector3d& eulerDeg) {
+    const Eigen::Vector3d e = eulerDeg * kDeg;
+    const Eigen::Matrix3d r = (Eigen::AngleAxisd(e.z(), Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(e.x(), Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd(-e.y(), Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();
+    const Eigen::AngleAxisd aa(r);
+    return aa.angle() * aa.axis();
+}
+
+HeadPose headPoseOf(const FaceParams& params) {
+    const Eigen::Quaterniond q(rotationOf(params.omega()) * modelToFrontal());
+    const Eigen::Vector3d euler = eulerDegrees(params.omega());
+    const Eigen::Vector3d t = params.translation() * 10.0;  // cm -> mm
+    HeadPose pose;
+    pose.rotation = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
+                     static_cast<float>(q.z())};
+    pose.euler_deg = {static_cast<float>(euler.x()), static_cast<float>(euler.y()), static_cast<float>(euler.z())};
+    pose.translation_mm = {static_cast<float>(t.x()), static_cast<float>(t.y()), static_cast<float>(t.z())};
+    return pose;
+}
+
+}  // namespace facetrack::fit
