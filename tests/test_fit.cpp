@@ -34,7 +34,7 @@ SyntheticFrame randomFrame(const Scene& s, const Eigen::Matrix3Xd& base, std::mt
     f.truth.pose.tail<3>() = Eigen::Vector3d(6.0 * sym(rng), 4.0 * sym(rng), depth);
     f.truth.expression = Eigen::VectorXd::Zero(s.basis->expressionCount());
     for (const int e : expressions) f.truth.expression[e] = unit(rng) < 0.3 ? unit(rng) : 0.0;
-    const auto contour = fit::selectContour(*s.basis, base, s.camera, f.truth);
+    const auto contour = fit::silhouetteContour(*s.basis, base, s.camera, f.truth);
     f.clean = fit::projectLandmarks(*s.basis, base, s.camera, f.truth, contour);
     f.observed = f.clean;
     for (int i = 0; i < f.observed.cols(); ++i) f.observed.col(i) += Eigen::Vector2d(noise(rng), noise(rng));
@@ -96,13 +96,13 @@ TEST(Fit, EulerAnglesRoundTripAndFollowTheDocumentedSigns) {
     fit::FaceParams p;
     p.pose << fit::omegaFromEuler({0, 30, 0}), 0, 0, 60;
     p.expression = Eigen::VectorXd::Zero(s.basis->expressionCount());
-    const auto l = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::selectContour(*s.basis, s.basis->neutral, s.camera, p));
+    const auto l = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
     EXPECT_GT(l(0, 30), 0.5 * (l(0, 36) + l(0, 45)));
     // pitch > 0 is chin down: the chin comes closer to the eyes in the image.
     p.pose.head<3>() = fit::omegaFromEuler({25, 0, 0});
-    const auto down = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::selectContour(*s.basis, s.basis->neutral, s.camera, p));
+    const auto down = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
     p.pose.head<3>().setZero();
-    const auto front = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::selectContour(*s.basis, s.basis->neutral, s.camera, p));
+    const auto front = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
     EXPECT_LT(down(1, 8) - down(1, 27), front(1, 8) - front(1, 27));
     const HeadPose pose = fit::headPoseOf(p);
     EXPECT_NEAR(pose.translation_mm.z, 600.f, 1e-3f);
@@ -114,7 +114,7 @@ TEST(Fit, JawContourFollowsTheSilhouetteUnderYaw) {
     fit::FaceParams p;
     p.pose << fit::omegaFromEuler({0, 45, 0}), 0, 0, 60;
     p.expression = Eigen::VectorXd::Zero(s.basis->expressionCount());
-    const auto contour = fit::selectContour(*s.basis, s.basis->neutral, s.camera, p);
+    const auto contour = fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p);
     const auto fixedJaw = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p,
                                                 [&] { fit::ContourSlots c; for (int i = 0; i < 17; ++i) c[i] = s.basis->landmark_slots[i]; return c; }());
     const auto silhouette = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, contour);

@@ -1,12 +1,17 @@
 #include "commands.hpp"
 #include "json.hpp"
 #include "media.hpp"
+#include "overlay.hpp"
 
 #include "core/environment.hpp"
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"
 
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <iostream>
 
@@ -14,46 +19,84 @@ namespace facetrack::cli {
 
 namespace {
 
-const char* kUsage = R"(usage: facetrack track [CLIP|DIR|IMAGE | --camera /dev/videoN] [--out results.jsonl] [--frames N]
-                       [--max-faces N] [--detector auto|yunet|cascade] [--yunet PATH]
+const char* kUsage = R"(usage: facetrack track [CLIP|DIR|IMAGE | --camera /dev/videoN] [--out results.jsonl] [--overlay out.mp4]
+                       [--frames N] [--raw] [tracker options]
 Runs the tracker and writes one JSON line per frame (to stdout, or --out):
-  {"frame": N, "time_s": t, "faces": [{"tracked": b, "confidence": c, "box": [x0,y0,x1,y1],
-    "landmarks": ..., "pose": ..., "blendshapes": ..., "gaze": ...}], "timings_ms": {"detect": ms, ...}}
-A field whose stage is not available in this build is null ('facetrack info' lists the stages).
+  {"frame": N, "time_s": t, "tracked": b, "id": i, "detected": b, "confidence": c, "fit_residual": r,
+   "box": [x0,y0,x1,y1], "landmarks": [[x,y] x 68], "pose": {"quaternion": [w,x,y,z],
+   "euler_deg": [pitch,yaw,roll], "translation_mm": [x,y,z]}, "blendshapes": {52 ARKit names: w},
+   "gaze": ..., "identity_calibrated": b, "timings_ms": {"detect": ms, "landmarks": ms, ...}}
+"tracked" says whether a face was followed in this frame; the face fields are the first face's
+(null without a face, or when their stage is not available: 'facetrack info' lists the stages).
+With --max-faces N > 1 a "faces" array holds every face. --raw adds "raw": the values before
+temporal filtering. docs/api.md gives the axis conventions.
+--overlay writes a video with the mesh wireframe, landmarks and head axes drawn in.
+Tracker options: --max-faces N, --fov DEG (default 60), --focal PX, --calibration-frames N (0: mean face),
+  --no-filter, --filter-cutoff HZ, --filter-beta B, and the detector options.
 With no input: the first webcam, else a clip from ../shared/data/clips.)";
 
 Json vec3(const Vec3& v) { return {v.x, v.y, v.z}; }
 
-Json faceJson(const FaceResult& face) {
-    Json j = {{"tracked", face.tracked},
-                        {"confidence", round2(face.confidence)},
-                        {"box", boxJson(face.box)},
-                        {"landmarks", nullptr},
-                        {"pose", nullptr},
-                        {"blendshapes", nullptr},
-                        {"gaze", nullptr}};
-    if (face.landmarks) {
-        j["landmarks"] = landmarksJson(*face.landmarks);
-    }
-    if (face.pose) {
-        const auto& q = face.pose->rotation;
-        j["pose"] = {{"quaternion", {q.w, q.x, q.y, q.z}},
-                     {"euler_deg", vec3(face.pose->euler_deg)},
-                     {"translation_mm", vec3(face.pose->translation_mm)}};
-    }
-    if (face.expression) {
-        j["blendshapes"] = Json::object();
-        for (int k = 0; k < kArkitBlendshapeCount; ++k) {
-            j["blendshapes"][std::string(arkitNames()[k])] = face.expression->arkit[k];
-        }
-    }
+Json poseJson(const std::optional<HeadPose>& pose) {
+    if (!pose) return nullptr;
+    const auto& q = pose->rotation;
+    return {{"quaternion", {q.w, q.x, q.y, q.z}},
+            {"euler_deg", vec3(pose->euler_deg)},
+            {"translation_mm", vec3(pose->translation_mm)}};
+}
+
+Json blendshapesJson(const std::optional<ExpressionResult>& expression) {
+    if (!expression) return nullptr;
+    Json out = Json::object();
+    for (int k = 0; k < kArkitBlendshapeCount; ++k) out[std::string(arkitNames()[k])] = round2(expression->arkit[k]);
+    return out;
+}
+
+Json landmarksOrNull(const std::optional<Landmarks68>& landmarks) {
+    return landmarks ? landmarksJson(*landmarks) : Json(nullptr);
+}
+
+Json faceJson(const FaceResult& face, bool raw) {
+    Json j = {{"id", face.id},
+              {"detected", !face.tracked},
+              {"confidence", round2(face.confidence)},
+              {"fit_residual", face.fit_residual ? Json(std::round(*face.fit_residual * 1e4) / 1e4) : Json(nullptr)},
+              {"box", boxJson(face.box)},
+              {"landmarks", landmarksOrNull(face.landmarks)},
+              {"pose", poseJson(face.pose)},
+              {"blendshapes", blendshapesJson(face.expression)},
+              {"gaze", nullptr},
+              {"identity_calibrated", face.identity_calibrated}};
     if (face.gaze) {
         auto eye = [](const EyeGaze& e) {
             return Json{{"direction", vec3(e.direction)}, {"yaw_deg", e.yaw_deg},
-                                  {"pitch_deg", e.pitch_deg}, {"openness", e.openness}};
+                        {"pitch_deg", e.pitch_deg}, {"openness", e.openness}};
         };
         j["gaze"] = {{"left", eye(face.gaze->left)}, {"right", eye(face.gaze->right)}};
     }
+    if (raw) {
+        j["raw"] = {{"landmarks", landmarksOrNull(face.raw.landmarks)},
+                    {"pose", poseJson(face.raw.pose)},
+                    {"blendshapes", blendshapesJson(face.raw.expression)}};
+    }
+    return j;
+}
+
+/// One output line: the frame, the first face's fields at the top level, every face under
+/// "faces" when several may be followed.
+Json frameJson(int frame, double time_s, const FrameResult& result, int maxFaces, bool raw) {
+    Json j = {{"frame", frame}, {"time_s", std::round(time_s * 1e4) / 1e4}, {"tracked", !result.faces.empty()}};
+    const Json first = result.faces.empty() ? faceJson(FaceResult{}, raw) : faceJson(result.faces.front(), raw);
+    for (const auto& [key, value] : first.items()) {
+        j[key] = result.faces.empty() ? Json(nullptr) : value;
+    }
+    if (maxFaces > 1) {
+        j["faces"] = Json::array();
+        for (const auto& face : result.faces) j["faces"].push_back(faceJson(face, raw));
+    }
+    Json timings = Json::object();
+    for (const auto& t : result.timings) timings[t.stage] = std::round(t.ms * 1e3) / 1e3;
+    j["timings_ms"] = timings;
     return j;
 }
 
@@ -88,17 +131,14 @@ MediaReader openInput(const Args& args, std::string& name) {
 }  // namespace
 
 int runTrack(const std::vector<std::string>& argv) {
-    auto valued = kDetectorOptions;
-    valued.insert({"--camera", "--out", "--frames", "--max-faces"});
-    const Args args(argv, valued, {"--help"});
+    const Args args(argv, trackingOptions({"--camera", "--out", "--frames", "--overlay"}), {"--help", "--raw", "--no-filter"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
     }
     const double maxFrames = args.number("--frames", -1);
-    TrackerConfig config;
-    config.detector = detectorConfig(args);
-    config.max_faces = static_cast<int>(args.number("--max-faces", 1));
+    const TrackerConfig config = trackerConfig(args);
+    const bool raw = args.has("--raw");
 
     std::string inputName;
     auto reader = openInput(args, inputName);
@@ -111,26 +151,35 @@ int runTrack(const std::vector<std::string>& argv) {
         if (!file) throw Error("cannot write '" + args.get("--out") + "'");
     }
     std::ostream& out = args.has("--out") ? file : std::cout;
+    const OverlayRenderer overlay(*tracker.models().face);
+    cv::VideoWriter video;
+    cv::Size videoSize;
 
     MediaFrame frame;
     int frames = 0, withFace = 0;
-    const auto start = std::chrono::steady_clock::now();
+    double trackerSeconds = 0.0;
     while ((maxFrames < 0 || frames < maxFrames) && reader.next(frame)) {
+        const auto start = std::chrono::steady_clock::now();
         const FrameResult result = tracker.process(core::viewOf(frame.bgr), frame.time_s);
-        Json faces = Json::array();
-        for (const auto& face : result.faces) faces.push_back(faceJson(face));
-        Json timings = Json::object();
-        for (const auto& t : result.timings) timings[t.stage] = round2(t.ms);
-        out << Json{{"frame", frames}, {"time_s", round2(frame.time_s)}, {"faces", faces},
-                              {"timings_ms", timings}}
-                   .dump()
-            << '\n';
+        trackerSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        out << frameJson(frames, frame.time_s, result, config.max_faces, raw).dump() << '\n';
+        if (args.has("--overlay")) {
+            if (!video.isOpened()) {
+                const double fps = reader.fps() > 0 ? reader.fps() : 30.0;
+                videoSize = frame.bgr.size();
+                video.open(args.get("--overlay"), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps, videoSize);
+                if (!video.isOpened()) throw Error("cannot write video '" + args.get("--overlay") + "'");
+            }
+            cv::Mat canvas = frame.bgr.clone();
+            overlay.draw(canvas, result);
+            if (canvas.size() != videoSize) cv::resize(canvas, canvas, videoSize);  // images of a folder may differ
+            video.write(canvas);
+        }
         ++frames;
         withFace += result.faces.empty() ? 0 : 1;
     }
-    const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
-    std::cerr << "facetrack: " << frames << " frames, a face in " << withFace << ", "
-              << (elapsed.count() > 0 ? frames / elapsed.count() : 0.0) << " fps (decoding included)\n";
+    std::cerr << "facetrack: " << frames << " frames, a face in " << withFace << ", tracker "
+              << (trackerSeconds > 0 ? frames / trackerSeconds : 0.0) << " fps (decoding and output excluded)\n";
     return 0;
 }
 

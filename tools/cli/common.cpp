@@ -15,4 +15,26 @@ DetectorConfig detectorConfig(const Args& args) {
     return config;
 }
 
+TrackerConfig trackerConfig(const Args& args) {
+    TrackerConfig config;
+    config.detector = detectorConfig(args);
+    config.max_faces = static_cast<int>(args.number("--max-faces", config.max_faces));
+    config.camera.horizontal_fov_deg = args.number("--fov", config.camera.horizontal_fov_deg);
+    config.camera.focal_length_px = args.number("--focal", config.camera.focal_length_px);
+    config.calibration_frames = static_cast<int>(args.number("--calibration-frames", config.calibration_frames));
+    config.filter.enabled = !args.has("--no-filter");
+    config.filter.min_cutoff_hz = args.number("--filter-cutoff", config.filter.min_cutoff_hz);
+    config.filter.beta = args.number("--filter-beta", config.filter.beta);
+    if (!(config.filter.min_cutoff_hz > 0.0) || !(config.filter.beta >= 0.0)) {
+        throw Error("--filter-cutoff must be positive and --filter-beta not negative");
+    }
+    return config;
+}
+
+std::set<std::string> trackingOptions(std::set<std::string> more) {
+    more.insert(kDetectorOptions.begin(), kDetectorOptions.end());
+    more.insert(kTrackerOptions.begin(), kTrackerOptions.end());
+    return more;
+}
+
 }  // namespace facetrack::cli

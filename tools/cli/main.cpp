@@ -14,7 +14,9 @@ const char* kUsage = R"(usage: facetrack COMMAND [ARGS]
 commands:
   info                               models, versions, detector in use, stages
   detect IMAGE|DIR|CLIP              faces per image or frame, as JSON lines
-  track [CLIP|--camera /dev/videoN]  run the tracker, JSON lines per frame
+  track [CLIP|--camera /dev/videoN]  run the tracker, JSON lines per frame [--overlay out.mp4]
+  bench CLIP                         tracker fps and per-stage ms (mean/p50/p99), per-frame plot
+  eval-track CLIP...                 tracked share, jitter with/without filter, against dlib
   landmarks IMAGE|DIR|CLIP [--box x0,y0,x1,y1]   68 landmarks per face, as JSON lines
   eval-detect DIR                    detector recall and speed on .pts-annotated images
   eval-landmarks DIR                 landmark NME, failure rate, CED plot, against peers
@@ -33,7 +35,8 @@ int main(int argc, char** argv) {
     using namespace facetrack::cli;
     const std::map<std::string, std::function<int(const std::vector<std::string>&)>> commands = {
         {"info", runInfo},         {"detect", runDetect},           {"track", runTrack},
-        {"landmarks", runLandmarks}, {"eval-detect", runEvalDetect}, {"eval-landmarks", runEvalLandmarks}};
+        {"landmarks", runLandmarks}, {"eval-detect", runEvalDetect}, {"eval-landmarks", runEvalLandmarks},
+        {"bench", runBench},       {"eval-track", runEvalTrack}};
     if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
         std::fputs(kUsage, argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;

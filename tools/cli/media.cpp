@@ -3,8 +3,10 @@
 #include "facetrack/error.hpp"
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 
@@ -96,6 +98,36 @@ bool MediaReader::next(MediaFrame& frame) {
         return true;
     }
     return false;
+}
+
+std::vector<MediaFrame> readAllFrames(const std::string& path, int maxFrames, cv::Size size) {
+    auto reader = MediaReader::open(path);
+    std::vector<MediaFrame> frames;
+    MediaFrame frame;
+    while ((maxFrames < 0 || static_cast<int>(frames.size()) < maxFrames) && reader.next(frame)) {
+        if (!size.empty()) {
+            const double scale = std::min(static_cast<double>(size.width) / frame.bgr.cols,
+                                          static_cast<double>(size.height) / frame.bgr.rows);
+            cv::Mat scaled, boxed(size, CV_8UC3, cv::Scalar::all(0));
+            cv::resize(frame.bgr, scaled, cv::Size(), scale, scale, scale < 1 ? cv::INTER_AREA : cv::INTER_LINEAR);
+            scaled.copyTo(boxed(cv::Rect((size.width - scaled.cols) / 2, (size.height - scaled.rows) / 2, scaled.cols, scaled.rows)));
+            frame.bgr = boxed;
+        }
+        frames.push_back(frame);
+        frame = MediaFrame{};  // the reader may reuse buffers
+    }
+    if (frames.empty()) throw Error("no frames in '" + path + "'");
+    return frames;
+}
+
+cv::Size parseSize(const std::string& text) {
+    if (text.empty()) return {};
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 16 || h < 16 || w > 8192 || h > 8192) {
+        throw Error("a size is WIDTHxHEIGHT, e.g. 640x480 (16..8192), not '" + text + "'");
+    }
+    return {w, h};
 }
 
 }  // namespace facetrack::cli

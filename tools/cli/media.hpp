@@ -43,6 +43,14 @@ bool isImageFile(const std::string& path);
 /// Every image file below dir, sorted by path.
 std::vector<std::string> listImages(const std::string& dir);
 
+/// Every frame of `path` (at most maxFrames when >= 0), decoded up front so
+/// that timing loops do not time the decoder. A non-empty `size` letterboxes
+/// each frame into that size (scaled to fit, black borders).
+std::vector<MediaFrame> readAllFrames(const std::string& path, int maxFrames, cv::Size size = {});
+
+/// "640x480" -> cv::Size; "" -> empty size. Throws Error on anything else.
+cv::Size parseSize(const std::string& text);
+
 /// /dev/video* devices, sorted.
 std::vector<std::string> listCameras();
 

@@ -8,6 +8,7 @@
 /// shared by any number of Trackers on any threads.
 
 #include "facetrack/arkit.hpp"
+#include "facetrack/geometry.hpp"
 
 #include <array>
 #include <cstdint>
@@ -49,6 +50,16 @@ public:
     /// ARKit-52 weights (arkitNames() order) from native expression weights
     /// (expressionNames() order). Throws Error when `native` has the wrong size.
     std::array<float, kArkitBlendshapeCount> toArkit(const std::vector<float>& native) const;
+
+    /// The mesh for identity coefficients `identity` (empty: the mean face) and
+    /// native expression weights `expression` (expressionNames() order; empty:
+    /// neutral), in millimetres in the model frame, so that
+    /// HeadPose::rotation * v + HeadPose::translation_mm is in the camera frame.
+    /// Throws Error when a vector has the wrong size.
+    std::vector<Vec3> vertices(const std::vector<float>& identity, const std::vector<float>& expression) const;
+
+    /// The mesh's triangles, as indices into vertices().
+    std::vector<std::array<int, 3>> triangles() const;
 
     /// Internal representation, for facetrack's own stages.
     const model::FaceModelData& data() const { return *data_; }

@@ -53,14 +53,40 @@ struct GazeResult {
     EyeGaze right;  ///< the subject's right eye (landmarks 36-41)
 };
 
+/// The per-frame estimates of one face. With temporal filtering on,
+/// FaceResult's own fields are filtered and `raw` holds them unfiltered.
+struct FaceEstimates {
+    std::optional<Landmarks68> landmarks;
+    std::optional<HeadPose> pose;
+    std::optional<ExpressionResult> expression;
+};
+
 struct FaceResult {
+    int id = 0;               ///< stable while the face is followed; a face found again gets a new id
     bool tracked = false;     ///< true when followed from the previous frame, false when freshly detected
-    float confidence = 0.f;   ///< 0..1; from the detector until a later stage refines it
-    Box box;                  ///< face box in image pixels
+    /// 0..1: the detector's score for a fresh face; once fitted,
+    /// 1 - fit_residual / TrackerConfig::max_fit_residual.
+    float confidence = 0.f;
+    Box box;                  ///< the landmarks' bounding box; the detector's box when there are no landmarks
     std::optional<Landmarks68> landmarks;
     std::optional<HeadPose> pose;
     std::optional<ExpressionResult> expression;
     std::optional<GazeResult> gaze;
+    /// RMS distance between the landmarks and the fitted face's projection, in
+    /// outer-eye-corner distances (the fit's confidence signal; lower is better).
+    std::optional<float> fit_residual;
+    /// Identity coefficients of the fitted face (FaceModel::vertices); empty
+    /// before calibration, i.e. the mean face.
+    std::vector<float> identity;
+    bool identity_calibrated = false;
+    FaceEstimates raw;        ///< landmarks, pose and expression before temporal filtering
+};
+
+/// The pinhole camera the fit assumed (TrackerConfig::camera): a camera-frame
+/// point (x, y, z) mm projects to (fx x / z + cx, fy y / z + cy) pixels.
+struct CameraIntrinsics {
+    float fx = 0.f, fy = 0.f;
+    float cx = 0.f, cy = 0.f;
 };
 
 /// Wall-clock time one stage took on this frame.
@@ -72,6 +98,7 @@ struct StageTiming {
 struct FrameResult {
     std::vector<FaceResult> faces;     ///< empty: no face
     std::vector<StageTiming> timings;  ///< in pipeline order, only stages that ran
+    CameraIntrinsics camera;
 };
 
 }  // namespace facetrack

@@ -34,9 +34,42 @@ struct Models {
     static Models loadDefault();
 };
 
+/// The webcam's pinhole model. Principal point: the image centre. Focal
+/// length: `focal_length_px` when positive, else from the horizontal field of
+/// view. docs/fitting.md says how to calibrate it; a wrong focal length biases
+/// depth and, a little, pitch and yaw.
+struct CameraConfig {
+    double horizontal_fov_deg = 60.0;  ///< a typical webcam
+    double focal_length_px = 0.0;      ///< at the frame's resolution; 0: use the field of view
+};
+
+/// The 1-euro filter on landmarks, pose and expressions (docs/fitting.md).
+/// Speeds are measured in face sizes per second, so one setting suits near
+/// and far faces.
+struct FilterConfig {
+    bool enabled = true;
+    double min_cutoff_hz = 1.0;         ///< cutoff at rest: lower = steadier
+    double beta = 2.0;                  ///< how fast the cutoff rises with speed: higher = less lag
+    double derivative_cutoff_hz = 1.0;
+};
+
 struct TrackerConfig {
     DetectorConfig detector;
+    CameraConfig camera;
+    FilterConfig filter;
     int max_faces = 1;  ///< faces followed at once
+    /// Look for new faces every this many frames while fewer than max_faces
+    /// are followed (every frame while none is).
+    int detect_interval = 15;
+    /// Confirm a followed face with the detector, on a small crop around it,
+    /// every this many frames (0: never). Catches a tracker that sticks to
+    /// background after the face left.
+    int verify_interval = 30;
+    /// A fit residual above this (eye-corner distances) drops the face and re-detects.
+    float max_fit_residual = 0.12f;
+    /// Estimate the user's identity from this many well-fitted frames (one
+    /// taken every 5 frames), then freeze it. 0: keep the mean face.
+    int calibration_frames = 30;
 };
 
 /// One Tracker follows the faces of one video stream. It is not thread-safe;
@@ -52,6 +85,10 @@ public:
     /// Processes the next frame of the stream; time_s is its timestamp in
     /// seconds (used by temporal filtering). Throws Error on an invalid view.
     FrameResult process(const ImageView& frame, double time_s);
+
+    /// Forgets the calibrated identity of every followed face: they go back to
+    /// the mean face and calibrate again.
+    void resetIdentity();
 
     /// Every pipeline stage, in order, with its availability in this build.
     std::vector<StageInfo> stages() const;

@@ -4,68 +4,81 @@
 
 namespace facetrack::fit {
 
-LandmarkCost::LandmarkCost(const Inputs& inputs, const double* observed, int slot, bool withIdentity)
-    : in_(inputs), observed_(observed), slot_(slot), with_identity_(withIdentity) {
-    set_num_residuals(2);
+LandmarksCost::LandmarksCost(const Inputs& inputs, bool withIdentity) : in_(inputs), with_identity_(withIdentity) {
+    slots_ = in_.basis->landmark_slots;
+    set_num_residuals(2 * kCount);
     auto* sizes = mutable_parameter_block_sizes();
     sizes->push_back(6);
     sizes->push_back(in_.basis->expressionCount());
     if (with_identity_) sizes->push_back(in_.basis->identityCount());
 }
 
-bool LandmarkCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+bool LandmarksCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
     const FitBasis& basis = *in_.basis;
     const int expressions = basis.expressionCount();
     const int identities = basis.identityCount();
     const double* pose = parameters[0];
-    const auto rowsD = basis.expression.middleRows<3>(3 * slot_);
-    const auto rowsB = basis.identity.middleRows<3>(3 * slot_);
+    const Eigen::Map<const Eigen::VectorXd> b(parameters[1], expressions);
+    const Eigen::Vector3d t(pose[3], pose[4], pose[5]);
 
-    Eigen::Vector3d x = in_.base->col(slot_);
-    x.noalias() += rowsD * Eigen::Map<const Eigen::VectorXd>(parameters[1], expressions);
-    if (with_identity_) x.noalias() += rowsB * Eigen::Map<const Eigen::VectorXd>(parameters[2], identities);
-
-    // R(omega) x and its derivative in omega, by forward-mode differentiation
-    // of Ceres's angle-axis rotation (exact, also away from omega = 0).
+    // R(omega) and dR/domega_k, by forward-mode differentiation of Ceres's
+    // angle-axis conversion (exact, also away from omega = 0).
     using Jet3 = ceres::Jet<double, 3>;
     const Jet3 omega[3] = {Jet3(pose[0], 0), Jet3(pose[1], 1), Jet3(pose[2], 2)};
-    const Jet3 point[3] = {Jet3(x.x()), Jet3(x.y()), Jet3(x.z())};
-    Jet3 rotated[3];
-    ceres::AngleAxisRotatePoint(omega, point, rotated);
-    const Eigen::Vector3d y(rotated[0].a + pose[3], rotated[1].a + pose[4], rotated[2].a + pose[5]);
-    if (!(y.z() > 1e-3)) return false;  // behind the camera: Ceres rejects the step
+    Jet3 rJet[9];
+    ceres::AngleAxisToRotationMatrix(omega, rJet);  // column-major
+    Eigen::Matrix3d rotation;
+    std::array<Eigen::Matrix3d, 3> dRotation;
+    for (int k = 0; k < 9; ++k) {
+        rotation(k % 3, k / 3) = rJet[k].a;
+        for (int d = 0; d < 3; ++d) dRotation[d](k % 3, k / 3) = rJet[k].v[d];
+    }
 
     const Camera& cam = *in_.camera;
     const double invScale = 1.0 / *in_.scale;
-    const double invZ = 1.0 / y.z();
-    residuals[0] = (cam.fx * y.x() * invZ + cam.cx - observed_[0]) * invScale;
-    residuals[1] = (cam.fy * y.y() * invZ + cam.cy - observed_[1]) * invScale;
-    if (!jacobians) return true;
+    const double delta2 = in_.huber * in_.huber;
+    for (int i = 0; i < kCount; ++i) {
+        const int slot = slots_[i];
+        const auto rowsD = basis.expression.middleRows<3>(3 * slot);
+        Eigen::Vector3d x = in_.base->col(slot);
+        x.noalias() += rowsD * b;
+        if (with_identity_) {
+            x.noalias() += basis.identity.middleRows<3>(3 * slot) * Eigen::Map<const Eigen::VectorXd>(parameters[2], identities);
+        }
+        const Eigen::Vector3d y = rotation * x + t;
+        if (!(y.z() > 1e-3)) return false;  // behind the camera: Ceres rejects the step
+        const double invZ = 1.0 / y.z();
+        const Eigen::Vector2d e((cam.fx * y.x() * invZ + cam.cx - in_.observed[2 * i]) * invScale,
+                                (cam.fy * y.y() * invZ + cam.cy - in_.observed[2 * i + 1]) * invScale);
+        // Huber: rho(s) = s for s <= delta^2, else 2 delta sqrt(s) - delta^2.
+        const double s = e.squaredNorm();
+        const bool inlier = s <= delta2;
+        const double costScale = inlier ? 1.0 : std::sqrt((2.0 * in_.huber * std::sqrt(s) - delta2) / s);
+        const double jacobianScale = inlier ? 1.0 : std::sqrt(in_.huber / std::sqrt(s));
+        residuals[2 * i] = costScale * e.x();
+        residuals[2 * i + 1] = costScale * e.y();
+        if (!jacobians) continue;
 
-    // d r / d y: the perspective projection's Jacobian, scaled.
-    Eigen::Matrix<double, 2, 3> dProj;
-    dProj << cam.fx * invZ, 0.0, -cam.fx * y.x() * invZ * invZ,  //
-        0.0, cam.fy * invZ, -cam.fy * y.y() * invZ * invZ;
-    dProj *= invScale;
-
-    if (jacobians[0]) {
-        Eigen::Map<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> j(jacobians[0]);
-        Eigen::Matrix3d dOmega;
-        for (int r = 0; r < 3; ++r) dOmega.row(r) = rotated[r].v.transpose();
-        j.leftCols<3>() = dProj * dOmega;
-        j.rightCols<3>() = dProj;
-    }
-    if (jacobians[1] || (with_identity_ && jacobians[2])) {
-        Eigen::Matrix3d rotation;
-        ceres::AngleAxisToRotationMatrix(pose, rotation.data());  // column-major
+        // d e / d y: the perspective projection's Jacobian, scaled.
+        Eigen::Matrix<double, 2, 3> dProj;
+        dProj << cam.fx * invZ, 0.0, -cam.fx * y.x() * invZ * invZ,  //
+            0.0, cam.fy * invZ, -cam.fy * y.y() * invZ * invZ;
+        dProj *= invScale * jacobianScale;
+        if (jacobians[0]) {
+            Eigen::Map<Eigen::Matrix<double, 2 * kCount, 6, Eigen::RowMajor>> j(jacobians[0]);
+            for (int d = 0; d < 3; ++d) j.block<2, 1>(2 * i, d) = dProj * (dRotation[d] * x);
+            j.block<2, 3>(2 * i, 3) = dProj;
+        }
         const Eigen::Matrix<double, 2, 3> dX = dProj * rotation;
         if (jacobians[1]) {
-            Eigen::Map<Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[1], 2, expressions)
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[1], 2 * kCount, expressions)
+                .middleRows<2>(2 * i)
                 .noalias() = dX * rowsD;
         }
         if (with_identity_ && jacobians[2]) {
-            Eigen::Map<Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[2], 2, identities)
-                .noalias() = dX * rowsB;
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[2], 2 * kCount, identities)
+                .middleRows<2>(2 * i)
+                .noalias() = dX * basis.identity.middleRows<3>(3 * slot);
         }
     }
     return true;

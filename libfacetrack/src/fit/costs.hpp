@@ -8,36 +8,44 @@
 
 #include <ceres/ceres.h>
 
+#include <array>
+
 namespace facetrack::fit {
 
-/// One landmark's reprojection error, in units of the face size s (the
-/// eye-corner distance in pixels):
-///   r = (pi(R(omega) X + t) - u) / s,   X = X_0 + D b [+ B a]
-/// X_0 the slot's base shape (neutral with identity applied, or the plain
-/// neutral when identity a is a parameter too), D and B its expression and
-/// identity rows. Parameter blocks: pose (omega, t) [6], expression b [E],
-/// and, with `withIdentity`, identity a [K].
-/// The observation, scale, camera and base are read through pointers, so one
-/// cost serves frame after frame; the slot can move along the jaw contour.
-class LandmarkCost final : public ceres::CostFunction {
+/// The 68 landmarks' reprojection errors, in units of the face size s (the
+/// eye-corner distance in pixels), each under a Huber loss rho:
+///   e_i = (pi(R(omega) X_i + t) - u_i) / s,   X_i = X0_i + D_i b [+ B_i a]
+///   r_i = sqrt(rho(|e_i|^2) / |e_i|^2) e_i,   so that |r_i|^2 = rho(|e_i|^2),
+/// with X0_i the slot's base shape (neutral with identity applied, or the
+/// plain neutral when identity a is a parameter too), D_i and B_i its
+/// expression and identity rows. The Jacobian is that of e_i scaled by
+/// sqrt(rho'(|e_i|^2)), the iteratively reweighted least-squares step.
+/// (One block for all landmarks, not 68 blocks under a Ceres loss: Ceres's
+/// per-block bookkeeping cost more than the maths.)
+/// Parameter blocks: pose (omega, t) [6], expression b [E], and, with
+/// `withIdentity`, identity a [K]. The observations, scale, camera and base
+/// are read through pointers, so one cost serves frame after frame; the jaw
+/// landmarks' slots move along the contour.
+class LandmarksCost final : public ceres::CostFunction {
 public:
+    static constexpr int kCount = model::kLandmarkCount;
     struct Inputs {
         const FitBasis* basis = nullptr;
         const Eigen::Matrix3Xd* base = nullptr;
         const Camera* camera = nullptr;
+        const double* observed = nullptr;  ///< 2 x 68, column-major (u, v) pixels
         const double* scale = nullptr;
+        double huber = 0.05;               ///< delta, in units of s
     };
-    LandmarkCost(const Inputs& inputs, const double* observed, int slot, bool withIdentity);
+    LandmarksCost(const Inputs& inputs, bool withIdentity);
 
-    void setSlot(int slot) { slot_ = slot; }
-    int slot() const { return slot_; }
+    void setSlot(int landmark, int slot) { slots_[landmark] = slot; }
 
     bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
 private:
     Inputs in_;
-    const double* observed_;  // (u, v) pixels
-    int slot_;
+    std::array<int, kCount> slots_{};
     bool with_identity_;
 };
 

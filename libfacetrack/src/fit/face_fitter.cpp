@@ -11,6 +11,8 @@ namespace {
 
 constexpr int kJaw = model::kContourLandmarkCount;
 
+/// Tolerances: a relative cost change of 1e-5 is far below the landmarks'
+/// noise; tighter ones only add iterations.
 ceres::Solver::Options solverOptions(int iterations, ceres::LinearSolverType solver) {
     ceres::Solver::Options options;
     options.linear_solver_type = solver;
@@ -18,9 +20,9 @@ ceres::Solver::Options solverOptions(int iterations, ceres::LinearSolverType sol
     options.num_threads = 1;
     options.logging_type = ceres::SILENT;
     options.minimizer_progress_to_stdout = false;
-    options.function_tolerance = 1e-7;
+    options.function_tolerance = 1e-5;
     options.gradient_tolerance = 1e-8;
-    options.parameter_tolerance = 1e-6;
+    options.parameter_tolerance = 1e-5;
     return options;
 }
 
@@ -66,8 +68,8 @@ Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base
     return out;
 }
 
-ContourSlots selectContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                           const FaceParams& params) {
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                               const FaceParams& params) {
     const Eigen::Matrix3Xd x = slotPositions(basis, base, params.expression);
     const Eigen::Matrix3d rotation = rotationOf(params.omega());
     auto projected = [&](int slot) { return camera.project<double>(transformed(params, rotation, x.col(slot))); };
@@ -90,6 +92,25 @@ ContourSlots selectContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, 
     return chosen;
 }
 
+ContourSlots nearestContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                            const FaceParams& params, const Landmarks2d& observed) {
+    const Eigen::Matrix3Xd x = slotPositions(basis, base, params.expression);
+    const Eigen::Matrix3d rotation = rotationOf(params.omega());
+    ContourSlots chosen{};
+    for (int i = 0; i < kJaw; ++i) {
+        chosen[i] = basis.landmark_slots[i];
+        double best = std::numeric_limits<double>::infinity();
+        for (const int slot : basis.contour_slots[i]) {
+            const double d = (camera.project<double>(transformed(params, rotation, x.col(slot))) - observed.col(i)).squaredNorm();
+            if (d < best) {
+                best = d;
+                chosen[i] = slot;
+            }
+        }
+    }
+    return chosen;
+}
+
 FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings& settings)
     : basis_(std::move(basis)), settings_(settings) {
     if (!basis_) throw Error("FaceFitter: no fit basis");
@@ -98,16 +119,9 @@ FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings&
     pose_.setZero();
     previous_pose_.setZero();
     expression_ = previous_expression_ = Eigen::VectorXd::Zero(expressions);
-    loss_ = std::make_unique<ceres::HuberLoss>(settings_.huber);
-
-    ceres::Problem::Options options;
-    options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    problem_ = std::make_unique<ceres::Problem>(options);
-    const LandmarkCost::Inputs inputs{basis_.get(), &base_, &camera_, &scale_};
-    for (int i = 0; i < model::kLandmarkCount; ++i) {
-        landmark_costs_[i] = new LandmarkCost(inputs, observed_.col(i).data(), basis_->landmark_slots[i], false);
-        problem_->AddResidualBlock(landmark_costs_[i], loss_.get(), pose_.data(), expression_.data());
-    }
+    problem_ = std::make_unique<ceres::Problem>();
+    landmarks_ = new LandmarksCost({basis_.get(), &base_, &camera_, observed_.data(), &scale_, settings_.huber}, false);
+    problem_->AddResidualBlock(landmarks_, nullptr, pose_.data(), expression_.data());
     expression_l2_ = new PullTowards(expressions, nullptr);
     expression_l2_->setWeight(settings_.expression_l2);
     problem_->AddResidualBlock(expression_l2_, nullptr, expression_.data());
@@ -116,9 +130,81 @@ FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings&
     pose_temporal_ = new PullTowards(6, previous_pose_.data());
     problem_->AddResidualBlock(pose_temporal_, nullptr, pose_.data());
     boundExpressions(*problem_, expression_.data(), expressions);
+
+    residuals_.resize(2 * model::kLandmarkCount);
+    jacobian_pose_.resize(2 * model::kLandmarkCount, 6);
+    jacobian_expression_.resize(2 * model::kLandmarkCount, expressions);
+    jacobian_.resize(2 * model::kLandmarkCount, 6 + expressions);
 }
 
 FaceFitter::~FaceFitter() = default;
+
+double FaceFitter::objective(Eigen::MatrixXd* jacobian) {
+    const int e = basis_->expressionCount();
+    const double* parameters[] = {pose_.data(), expression_.data()};
+    double* blocks[] = {jacobian_pose_.data(), jacobian_expression_.data()};
+    if (!landmarks_->Evaluate(parameters, residuals_.data(), jacobian ? blocks : nullptr)) {
+        return std::numeric_limits<double>::infinity();
+    }
+    double cost = residuals_.squaredNorm();
+    // The priors are diagonal quadratics: PullTowards' residuals, added here directly.
+    const double wT = warm_temporal_ ? settings_.expression_temporal : 0.0;
+    cost += settings_.expression_l2 * expression_.squaredNorm() + wT * (expression_ - previous_expression_).squaredNorm();
+    const Eigen::Matrix<double, 6, 1> wP = warm_temporal_ ? poseTemporalWeights(settings_) : Eigen::Matrix<double, 6, 1>::Zero();
+    cost += (wP.array() * (pose_ - previous_pose_).array().square()).sum();
+    if (jacobian) {
+        jacobian->leftCols<6>() = jacobian_pose_;
+        jacobian->rightCols(e) = jacobian_expression_;
+    }
+    return cost;
+}
+
+int FaceFitter::solveWarm(int iterations) {
+    const int e = basis_->expressionCount();
+    const double wT = settings_.expression_temporal;
+    const Eigen::Matrix<double, 6, 1> wP = poseTemporalWeights(settings_);
+    double cost = objective(&jacobian_);
+    if (!std::isfinite(cost)) return 0;
+    double lambda = 1e-4;
+    int steps = 0;
+    for (int it = 0; it < iterations; ++it) {
+        // Gauss-Newton system of all residuals: landmarks, then the priors' diagonals.
+        normal_.noalias() = jacobian_.transpose() * jacobian_;
+        gradient_.noalias() = jacobian_.transpose() * residuals_;
+        normal_.diagonal().head<6>() += wP;
+        gradient_.head<6>() += wP.cwiseProduct(pose_ - previous_pose_);
+        normal_.diagonal().tail(e).array() += settings_.expression_l2 + wT;
+        gradient_.tail(e) += settings_.expression_l2 * expression_ + wT * (expression_ - previous_expression_);
+
+        const Eigen::Matrix<double, 6, 1> pose = pose_;
+        const Eigen::VectorXd expression = expression_;
+        bool accepted = false;
+        for (int attempt = 0; attempt < 6 && !accepted; ++attempt) {
+            Eigen::MatrixXd damped = normal_;
+            damped.diagonal() *= 1.0 + lambda;
+            step_ = damped.ldlt().solve(-gradient_);
+            pose_ = pose + step_.head<6>();
+            expression_ = (expression + step_.tail(e)).cwiseMax(0.0).cwiseMin(1.0);  // projected onto the bounds
+            const double next = objective(nullptr);
+            if (next < cost) {
+                accepted = true;
+                lambda = std::max(lambda * 0.1, 1e-7);
+                const bool converged = cost - next < 1e-5 * cost;
+                cost = objective(&jacobian_);
+                ++steps;
+                if (converged) return steps;
+            } else {
+                lambda *= 10.0;
+            }
+        }
+        if (!accepted) {
+            pose_ = pose;
+            expression_ = expression;
+            break;
+        }
+    }
+    return steps;
+}
 
 void FaceFitter::setIdentity(const Eigen::VectorXd& identity) {
     if (identity.size() != 0 && identity.size() != basis_->identityCount()) {
@@ -177,20 +263,30 @@ FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, Fac
     pose_temporal_->setWeights(warm ? poseTemporalWeights(settings_) : Eigen::VectorXd::Zero(6));
 
     auto current = [&] { return FaceParams{pose_, expression_}; };
-    auto chooseContour = [&] {
-        report.contour = selectContour(*basis_, base_, camera_, current());
-        for (int i = 0; i < kJaw; ++i) landmark_costs_[i]->setSlot(report.contour[i]);
+    // Cold rounds start from the silhouette, which holds the pose steady while
+    // it is far off; the last round (and every warm fit) takes the candidates
+    // nearest the observed jaw points.
+    auto chooseContour = [&](bool nearest) {
+        report.contour = nearest ? nearestContour(*basis_, base_, camera_, current(), observed_)
+                                 : silhouetteContour(*basis_, base_, camera_, current());
+        for (int i = 0; i < kJaw; ++i) landmarks_->setSlot(i, report.contour[i]);
     };
     if (!warm) {
         // Pose alone first: from the frontal start, expressions would absorb the rotation.
-        chooseContour();
+        chooseContour(false);
         problem_->SetParameterBlockConstant(expression_.data());
         report.iterations += solve(settings_.cold_iterations);
         problem_->SetParameterBlockVariable(expression_.data());
     }
-    for (int round = 0; round < (warm ? 1 : 2); ++round) {
-        chooseContour();
-        report.iterations += solve(warm ? settings_.warm_iterations : settings_.cold_iterations);
+    warm_temporal_ = warm;
+    if (warm) {
+        chooseContour(true);
+        report.iterations += solveWarm(settings_.warm_iterations);
+    } else {
+        for (int round = 0; round < 2; ++round) {
+            chooseContour(round == 1);
+            report.iterations += solve(settings_.cold_iterations);
+        }
     }
     params = current();
     const Landmarks2d fitted = projectLandmarks(*basis_, base_, camera_, params, report.contour);
@@ -207,10 +303,7 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
     Eigen::VectorXd identity = Eigen::VectorXd::Zero(basis.identityCount());
     if (frames.empty()) return identity;
 
-    ceres::HuberLoss loss(settings.huber);
-    ceres::Problem::Options options;
-    options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(options);
+    ceres::Problem problem;
     std::vector<double> scales(frames.size());
     auto* identityPrior = new PullTowards(basis.identityCount(), nullptr);
     identityPrior->setWeight(settings.identity_prior * static_cast<double>(frames.size()));
@@ -219,12 +312,9 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
         auto& frame = frames[f];
         if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
         scales[f] = std::max(eyeCornerDistance(frame.observed), 1.0);
-        const LandmarkCost::Inputs inputs{&basis, &basis.neutral, &frame.camera, &scales[f]};
-        for (int i = 0; i < model::kLandmarkCount; ++i) {
-            const int slot = i < kJaw ? frame.contour[i] : basis.landmark_slots[i];
-            problem.AddResidualBlock(new LandmarkCost(inputs, frame.observed.col(i).data(), slot, true), &loss,
-                                     frame.params.pose.data(), frame.params.expression.data(), identity.data());
-        }
+        auto* cost = new LandmarksCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber}, true);
+        for (int i = 0; i < kJaw; ++i) cost->setSlot(i, frame.contour[i]);
+        problem.AddResidualBlock(cost, nullptr, frame.params.pose.data(), frame.params.expression.data(), identity.data());
         auto* l2 = new PullTowards(expressions, nullptr);
         l2->setWeight(settings.expression_l2);
         problem.AddResidualBlock(l2, nullptr, frame.params.expression.data());

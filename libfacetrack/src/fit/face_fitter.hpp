@@ -9,7 +9,7 @@
 // over the pose p = (omega, t) and expression b, with u_i the landmarks, s the
 // eye-corner distance in pixels, rho a Huber loss. The 17 jaw landmarks are not
 // tied to fixed vertices: each is matched to the silhouette vertex among its
-// contour candidates (selectContour), re-chosen as the pose changes.
+// contour candidates (nearestContour), re-chosen as the pose changes.
 
 #include "fit/camera.hpp"
 #include "fit/costs.hpp"
@@ -33,7 +33,7 @@ struct FitSettings {
     double translation_temporal = 1e-5; ///< per cm^2
     double identity_prior = 2e-4;             ///< w_id |a|^2 during identity calibration
     int cold_iterations = 40;
-    int warm_iterations = 6;
+    int warm_iterations = 5;
 };
 
 struct FitReport {
@@ -55,9 +55,18 @@ Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base
 /// For each jaw landmark, the candidate on the silhouette: the one whose
 /// projection reaches furthest along the image direction of the landmark's
 /// outward axis (FitBasis::contour_outward). A path swept across the jaw
-/// reaches that extreme where it turns out of view.
-ContourSlots selectContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                           const FaceParams& params);
+/// reaches that extreme where it turns out of view. This is how a rendered
+/// face's jaw landmarks fall (the synthetic tests use it).
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                               const FaceParams& params);
+
+/// For each jaw landmark, the candidate whose projection is nearest the
+/// observed point: the correspondence the fit uses. On real faces the
+/// candidate paths (snapped to mesh vertices) wander off the outline in
+/// places, and the observed point, not the pure geometry, says where on the
+/// outline the annotator's jaw point lies.
+ContourSlots nearestContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                            const FaceParams& params, const Landmarks2d& observed);
 
 /// Fits one face frame by frame. Holds a Ceres problem that is built once and
 /// re-solved, so that a warm fit allocates little. Not copyable: the problem
@@ -84,6 +93,11 @@ public:
 private:
     FaceParams initialParams(const Landmarks2d& observed) const;
     int solve(int iterations);
+    /// The same objective minimised by a few Levenberg-Marquardt steps that call
+    /// the same cost functions directly: Ceres's Solve() spends ~150 us setting
+    /// up per call, three times the maths of a warm frame (docs/fitting.md).
+    int solveWarm(int iterations);
+    double objective(Eigen::MatrixXd* jacobian);  // residual norm^2 at pose_, expression_
 
     std::shared_ptr<const FitBasis> basis_;
     FitSettings settings_;
@@ -94,15 +108,21 @@ private:
     Camera camera_;
     Landmarks2d observed_ = Landmarks2d::Zero();
     double scale_ = 1.0;
+    bool warm_temporal_ = false;  // the temporal priors are on (warm fits)
     Eigen::Matrix<double, 6, 1> pose_, previous_pose_;
     Eigen::VectorXd expression_, previous_expression_;
 
-    std::unique_ptr<ceres::HuberLoss> loss_;
     std::unique_ptr<ceres::Problem> problem_;
-    std::array<LandmarkCost*, model::kLandmarkCount> landmark_costs_{};
+    LandmarksCost* landmarks_ = nullptr;
     PullTowards* expression_l2_ = nullptr;
     PullTowards* expression_temporal_ = nullptr;
     PullTowards* pose_temporal_ = nullptr;
+
+    // solveWarm's buffers, sized once.
+    Eigen::VectorXd residuals_;
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jacobian_pose_, jacobian_expression_;
+    Eigen::MatrixXd jacobian_, normal_;
+    Eigen::VectorXd gradient_, step_;
 };
 
 /// One frame of the identity calibration window.

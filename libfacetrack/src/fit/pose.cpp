@@ -2,8 +2,6 @@
 
 #include "fit/fit_basis.hpp"
 
-#include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 
@@ -42,16 +40,21 @@ Eigen::Vector3d omegaFromEuler(const Eigen::Vector3d& eulerDeg) {
     return aa.angle() * aa.axis();
 }
 
-HeadPose headPoseOf(const FaceParams& params) {
-    const Eigen::Quaterniond q(rotationOf(params.omega()) * modelToFrontal());
-    const Eigen::Vector3d euler = eulerDegrees(params.omega());
-    const Eigen::Vector3d t = params.translation() * 10.0;  // cm -> mm
+HeadPose headPoseOf(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& translationMm) {
+    const Eigen::Quaterniond q = rotation.normalized();
+    const Eigen::AngleAxisd fromFrontal(q.toRotationMatrix() * modelToFrontal().transpose());
+    const Eigen::Vector3d euler = eulerDegrees(fromFrontal.angle() * fromFrontal.axis());
     HeadPose pose;
     pose.rotation = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
                      static_cast<float>(q.z())};
     pose.euler_deg = {static_cast<float>(euler.x()), static_cast<float>(euler.y()), static_cast<float>(euler.z())};
-    pose.translation_mm = {static_cast<float>(t.x()), static_cast<float>(t.y()), static_cast<float>(t.z())};
+    pose.translation_mm = {static_cast<float>(translationMm.x()), static_cast<float>(translationMm.y()),
+                           static_cast<float>(translationMm.z())};
     return pose;
+}
+
+HeadPose headPoseOf(const FaceParams& params) {
+    return headPoseOf(Eigen::Quaterniond(rotationOf(params.omega()) * modelToFrontal()), params.translation() * 10.0);
 }
 
 }  // namespace facetrack::fit

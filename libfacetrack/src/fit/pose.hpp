@@ -5,6 +5,7 @@
 #include "facetrack/result.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace facetrack::fit {
 
@@ -27,6 +28,11 @@ Eigen::Vector3d eulerDegrees(const Eigen::Vector3d& omega);
 /// The angle-axis omega of a pose given as (pitch, yaw, roll) degrees.
 Eigen::Vector3d omegaFromEuler(const Eigen::Vector3d& eulerDeg);
 
+/// The public pose of a fitted face.
 HeadPose headPoseOf(const FaceParams& params);
+
+/// The public pose of a rotation x_camera = q x_model (a unit quaternion, R_0
+/// included) and a translation in mm.
+HeadPose headPoseOf(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& translationMm);
 
 }  // namespace facetrack::fit

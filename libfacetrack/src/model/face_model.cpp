@@ -42,4 +42,38 @@ std::vector<int> FaceModel::landmarkVertices() const {
     return std::vector<int>(data_->landmark_vertices.begin(), data_->landmark_vertices.end());
 }
 
+std::vector<Vec3> FaceModel::vertices(const std::vector<float>& identity, const std::vector<float>& expression) const {
+    const auto& d = *data_;
+    if (!identity.empty() && static_cast<int>(identity.size()) != d.identityCount()) {
+        throw Error("FaceModel::vertices: " + std::to_string(identity.size()) + " identity coefficients given, the model has " +
+                    std::to_string(d.identityCount()));
+    }
+    if (!expression.empty() && expression.size() != d.expressions.size()) {
+        throw Error("FaceModel::vertices: " + std::to_string(expression.size()) + " expression weights given, the model has " +
+                    std::to_string(d.expressions.size()));
+    }
+    Eigen::Matrix3Xf v = d.neutral;
+    if (!identity.empty()) {
+        const Eigen::VectorXf offsets = d.identity_basis * Eigen::Map<const Eigen::VectorXf>(identity.data(), identity.size());
+        v += Eigen::Map<const Eigen::Matrix3Xf>(offsets.data(), 3, v.cols());
+    }
+    for (std::size_t e = 0; e < expression.size(); ++e) {
+        if (expression[e] == 0.f) continue;
+        const auto& shape = d.expressions[e];
+        for (std::size_t k = 0; k < shape.vertices.size(); ++k) v.col(shape.vertices[k]) += expression[e] * shape.deltas.col(k);
+    }
+    std::vector<Vec3> out(v.cols());
+    for (Eigen::Index i = 0; i < v.cols(); ++i) out[i] = {10.f * v(0, i), 10.f * v(1, i), 10.f * v(2, i)};  // cm -> mm
+    return out;
+}
+
+std::vector<std::array<int, 3>> FaceModel::triangles() const {
+    std::vector<std::array<int, 3>> out;
+    out.reserve(data_->triangles.size());
+    for (const auto& t : data_->triangles) {
+        out.push_back({static_cast<int>(t[0]), static_cast<int>(t[1]), static_cast<int>(t[2])});
+    }
+    return out;
+}
+
 }  // namespace facetrack

@@ -1,0 +1,33 @@
+#include "filter/one_euro.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace facetrack::filter {
+
+namespace {
+
+double alpha(double cutoffHz, double dt) {
+    const double tau = 1.0 / (2.0 * 3.14159265358979323846 * cutoffHz);
+    return 1.0 / (1.0 + tau / dt);
+}
+
+}  // namespace
+
+Eigen::VectorXd OneEuroFilter::operator()(const Eigen::VectorXd& x, double dt, double scale) {
+    if (value_.size() != x.size() || !value_.allFinite() || !(dt > 0.0)) {
+        value_ = x;
+        speed_ = Eigen::VectorXd::Zero(x.size());
+        return value_;
+    }
+    scale = std::max(scale, 1e-9);
+    const double aSpeed = alpha(settings_.derivative_cutoff_hz, dt);
+    speed_ += aSpeed * ((x - value_) / (dt * scale) - speed_);
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+        const double cutoff = settings_.min_cutoff_hz + settings_.beta * std::abs(speed_[i]);
+        value_[i] += alpha(cutoff, dt) * (x[i] - value_[i]);
+    }
+    return value_;
+}
+
+}  // namespace facetrack::filter

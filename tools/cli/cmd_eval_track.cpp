@@ -1,0 +1,133 @@
+#include "commands.hpp"
+#include "media.hpp"
+
+#include "core/image.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <dlib/image_processing.h>
+#include <dlib/image_processing/frontal_face_detector.h>
+#include <dlib/opencv.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+namespace facetrack::cli {
+
+namespace {
+
+const char* kUsage = R"(usage: facetrack eval-track CLIP... [--frames N] [--size WxH] [--dlib FILE|none] [tracker options]
+For each clip, in one run: the share of frames with a face, frames per second (decoding
+excluded) and landmark jitter, for facetrack with its filter, facetrack without it (the
+same run's raw landmarks), and dlib (HOG detector + 68-point shape_predictor on every frame).
+Jitter: RMS over frames and points of the landmarks' second difference in time,
+|x(t+1) - 2 x(t) + x(t-1)|, over the outer-eye-corner distance, on frames whose neighbours
+have a face too. It counts real motion as well, so compare methods on the same clip.
+Run on one core for fair fps: taskset -c 0 facetrack eval-track ...)";
+
+using Track = std::vector<std::optional<Landmarks68>>;
+
+struct MethodResult {
+    Track landmarks;
+    double seconds = 0.0;
+};
+
+double jitter(const Track& track) {
+    double sum = 0.0;
+    long count = 0;
+    for (std::size_t t = 1; t + 1 < track.size(); ++t) {
+        if (!track[t - 1] || !track[t] || !track[t + 1]) continue;
+        const auto &a = *track[t - 1], &b = *track[t], &c = *track[t + 1];
+        const double eyes = std::hypot(b[36].x - b[45].x, b[36].y - b[45].y);
+        if (!(eyes > 1.0)) continue;
+        for (std::size_t i = 0; i < b.size(); ++i) {
+            const double dx = c[i].x - 2.0 * b[i].x + a[i].x, dy = c[i].y - 2.0 * b[i].y + a[i].y;
+            sum += (dx * dx + dy * dy) / (eyes * eyes);
+            ++count;
+        }
+    }
+    return count ? std::sqrt(sum / static_cast<double>(count)) : std::nan("");
+}
+
+double share(const Track& track) {
+    long n = 0;
+    for (const auto& l : track) n += l.has_value();
+    return track.empty() ? 0.0 : static_cast<double>(n) / static_cast<double>(track.size());
+}
+
+void printRow(const char* method, const Track& track, double seconds) {
+    std::printf("  %-26s %7.1f %% %9.1f %10.4f\n", method, 100.0 * share(track),
+                seconds > 0 ? static_cast<double>(track.size()) / seconds : 0.0, jitter(track));
+}
+
+}  // namespace
+
+int runEvalTrack(const std::vector<std::string>& argv) {
+    const Args args(argv, trackingOptions({"--frames", "--size", "--dlib"}), {"--help", "--no-filter"});
+    if (args.has("--help")) {
+        std::puts(kUsage);
+        return 0;
+    }
+    if (args.positional().empty()) throw Error("give at least one clip (see --help)");
+    const TrackerConfig config = trackerConfig(args);
+    const auto models = Models::loadDefault();
+    const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
+    std::optional<dlib::shape_predictor> predictor;
+    if (dlibPath != "none") {
+        if (!std::filesystem::exists(dlibPath)) throw Error("no dlib model '" + dlibPath + "' (--dlib none skips dlib)");
+        predictor.emplace();
+        dlib::deserialize(dlibPath) >> *predictor;
+    }
+    dlib::frontal_face_detector hog = dlib::get_frontal_face_detector();
+
+    std::printf("  %-26s %9s %9s %10s\n", "method", "face", "fps", "jitter");
+    for (const auto& clip : args.positional()) {
+        const auto frames = readAllFrames(clip, static_cast<int>(args.number("--frames", -1)), parseSize(args.get("--size")));
+        std::printf("%s (%zu frames, %dx%d)\n", clip.c_str(), frames.size(), frames[0].bgr.cols, frames[0].bgr.rows);
+
+        Tracker tracker(models, config);
+        Track filtered, raw;
+        double seconds = 0.0;
+        for (const auto& f : frames) {
+            const auto start = std::chrono::steady_clock::now();
+            const FrameResult r = tracker.process(core::viewOf(f.bgr), f.time_s);
+            seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const bool face = !r.faces.empty() && r.faces[0].landmarks;
+            filtered.push_back(face ? r.faces[0].landmarks : std::nullopt);
+            raw.push_back(face ? r.faces[0].raw.landmarks : std::nullopt);
+        }
+        printRow(config.filter.enabled ? "facetrack (filtered)" : "facetrack (no filter)", filtered, seconds);
+        if (config.filter.enabled) printRow("facetrack (raw, same run)", raw, seconds);
+
+        if (predictor) {
+            Track dlibTrack;
+            double dlibSeconds = 0.0;
+            cv::Mat gray;
+            for (const auto& f : frames) {
+                const auto start = std::chrono::steady_clock::now();
+                cv::cvtColor(f.bgr, gray, cv::COLOR_BGR2GRAY);
+                const dlib::cv_image<unsigned char> image(gray);
+                const auto faces = hog(image);
+                std::optional<Landmarks68> points;
+                if (!faces.empty()) {
+                    const auto shape = (*predictor)(image, faces[0]);
+                    Landmarks68 l;
+                    for (int i = 0; i < 68; ++i) {
+                        l[i] = {static_cast<float>(shape.part(i).x()), static_cast<float>(shape.part(i).y())};
+                    }
+                    points = l;
+                }
+                dlibSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+                dlibTrack.push_back(points);
+            }
+            printRow("dlib HOG + shape_predictor", dlibTrack, dlibSeconds);
+        }
+    }
+    return 0;
+}
+
+}  // namespace facetrack::cli

@@ -1,0 +1,85 @@
+#include "overlay.hpp"
+
+#include "model/face_model_data.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+namespace facetrack::cli {
+
+namespace {
+
+struct Projector {
+    CameraIntrinsics camera;
+    HeadPose pose;
+    /// Camera-frame position (mm) of a model-frame point (mm).
+    cv::Point3f toCamera(const Vec3& v) const {
+        const auto& q = pose.rotation;
+        // v' = q v q*, expanded.
+        const float ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+        const float xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z, wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+        const float x = (ww + xx - yy - zz) * v.x + 2 * (xy - wz) * v.y + 2 * (xz + wy) * v.z;
+        const float y = 2 * (xy + wz) * v.x + (ww - xx + yy - zz) * v.y + 2 * (yz - wx) * v.z;
+        const float z = 2 * (xz - wy) * v.x + 2 * (yz + wx) * v.y + (ww - xx - yy + zz) * v.z;
+        return {x + pose.translation_mm.x, y + pose.translation_mm.y, z + pose.translation_mm.z};
+    }
+    cv::Point2f project(const cv::Point3f& p) const {
+        return {camera.fx * p.x / p.z + camera.cx, camera.fy * p.y / p.z + camera.cy};
+    }
+};
+
+constexpr int kShift = 4;  // sub-pixel drawing: coordinates times 16
+cv::Point fixedPoint(const cv::Point2f& p) { return {cvRound(p.x * (1 << kShift)), cvRound(p.y * (1 << kShift))}; }
+
+}  // namespace
+
+OverlayRenderer::OverlayRenderer(const FaceModel& model) : model_(model) {
+    const auto& data = model.data();
+    for (const auto& t : model.triangles()) {
+        if (t[0] < static_cast<int>(data.face_vertex_count) && t[1] < static_cast<int>(data.face_vertex_count) &&
+            t[2] < static_cast<int>(data.face_vertex_count)) {
+            face_triangles_.push_back(t);
+        }
+    }
+    axes_origin_ = static_cast<int>(data.landmark_vertices[27]);
+}
+
+void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
+    for (const auto& face : result.faces) {
+        if (face.pose && face.expression) {
+            const Projector projector{result.camera, *face.pose};
+            const auto vertices = model_.vertices(face.identity, face.expression->native);
+            std::vector<cv::Point3f> cam(vertices.size());
+            for (std::size_t i = 0; i < vertices.size(); ++i) cam[i] = projector.toCamera(vertices[i]);
+            const cv::Scalar mesh(170, 200, 120);
+            for (const auto& t : face_triangles_) {
+                const cv::Point3f &a = cam[t[0]], &b = cam[t[1]], &c = cam[t[2]];
+                if (a.z <= 0 || b.z <= 0 || c.z <= 0) continue;
+                if ((b - a).cross(c - a).dot(a) >= 0) continue;  // faces away from the camera
+                const cv::Point pa = fixedPoint(projector.project(a)), pb = fixedPoint(projector.project(b)),
+                                pc = fixedPoint(projector.project(c));
+                cv::line(bgr, pa, pb, mesh, 1, cv::LINE_8, kShift);
+                cv::line(bgr, pb, pc, mesh, 1, cv::LINE_8, kShift);
+            }
+            // Model axes, 50 mm long: x red (subject's left), y green (up), z blue (out of the face).
+            const Vec3 o = vertices[axes_origin_];
+            const cv::Point2f origin = projector.project(projector.toCamera(o));
+            const std::array<std::pair<Vec3, cv::Scalar>, 3> axes = {{{{o.x + 50, o.y, o.z}, {0, 0, 255}},
+                                                                     {{o.x, o.y + 50, o.z}, {0, 200, 0}},
+                                                                     {{o.x, o.y, o.z + 50}, {255, 80, 0}}}};
+            for (const auto& [tip, colour] : axes) {
+                cv::line(bgr, fixedPoint(origin), fixedPoint(projector.project(projector.toCamera(tip))), colour, 2,
+                         cv::LINE_AA, kShift);
+            }
+        }
+        if (face.landmarks) {
+            for (const auto& p : *face.landmarks) {
+                cv::circle(bgr, fixedPoint({p.x, p.y}), 2 << kShift, cv::Scalar(0, 255, 255), -1, cv::LINE_AA, kShift);
+            }
+        }
+        cv::rectangle(bgr, cv::Point(cvRound(face.box.x0), cvRound(face.box.y0)),
+                      cv::Point(cvRound(face.box.x1), cvRound(face.box.y1)),
+                      face.tracked ? cv::Scalar(0, 200, 0) : cv::Scalar(0, 140, 255), 1);
+    }
+}
+
+}  // namespace facetrack::cli
