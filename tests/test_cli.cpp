@@ -2,6 +2,11 @@
 
 #include "test_support.hpp"
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <unistd.h>
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -55,7 +60,7 @@ TEST(Cli, InfoNamesModelsDetectorAndStages) {
     EXPECT_NE(run.out.find("face model: "), std::string::npos);
     EXPECT_NE(run.out.find("26719 vertices"), std::string::npos);
     EXPECT_NE(run.out.find("detect "), std::string::npos);
-    EXPECT_NE(run.out.find("fit        not available"), std::string::npos);
+    EXPECT_NE(run.out.find("cnn        not available"), std::string::npos);
 }
 
 TEST(Cli, DetectWritesOneJsonLinePerImage) {
@@ -84,15 +89,40 @@ TEST(Cli, TrackOnAClipNumbersFramesAndGivesLandmarks) {
     for (int i = 0; i < 3; ++i) {
         EXPECT_EQ(lines[i]["frame"], i);
         EXPECT_NEAR(lines[i]["time_s"].get<double>(), i / 30.0, 0.01);
-        ASSERT_EQ(lines[i]["faces"].size(), 1u);
-        EXPECT_TRUE(lines[i]["faces"][0]["pose"].is_null());  // stage not built yet
+        EXPECT_TRUE(lines[i]["tracked"].get<bool>());
+        EXPECT_TRUE(lines[i]["gaze"].is_null());  // stage not built yet
+        EXPECT_FALSE(lines[i].contains("faces"));  // only with --max-faces > 1
         if (std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm")) {
-            EXPECT_EQ(lines[i]["faces"][0]["landmarks"].size(), 68u);
-        } else {
-            EXPECT_TRUE(lines[i]["faces"][0]["landmarks"].is_null());
+            EXPECT_EQ(lines[i]["landmarks"].size(), 68u);
+            EXPECT_EQ(lines[i]["pose"]["quaternion"].size(), 4u);
+            EXPECT_EQ(lines[i]["pose"]["euler_deg"].size(), 3u);
+            EXPECT_GT(lines[i]["pose"]["translation_mm"][2].get<double>(), 100.0);
+            EXPECT_EQ(lines[i]["blendshapes"].size(), 52u);
+            EXPECT_TRUE(lines[i]["blendshapes"].contains("jawOpen"));
+            EXPECT_TRUE(lines[i]["timings_ms"].contains("fit"));
         }
-        EXPECT_TRUE(lines[i]["timings_ms"].contains("detect"));
+        EXPECT_EQ(lines[i]["timings_ms"].contains("detect"), i == 0);
     }
+}
+
+TEST(Cli, TrackWritesAnOverlayVideoAndBenchWritesAPlot) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string clip = test::sharedDir() + "/data/clips/liveportrait_d3_frown_surprise.mp4";
+    const auto dir = std::filesystem::temp_directory_path() / ("facetrack_cli_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const std::string video = (dir / "overlay.mp4").string(), plot = (dir / "bench.png").string();
+    const CliRun track = runCli("track '" + clip + "' --frames 5 --overlay '" + video + "' --out /dev/null");
+    ASSERT_EQ(track.exit_code, 0) << track.err;
+    cv::VideoCapture written(video);
+    ASSERT_TRUE(written.isOpened());
+    EXPECT_EQ(static_cast<int>(written.get(cv::CAP_PROP_FRAME_COUNT)), 5);
+    const CliRun bench = runCli("bench '" + clip + "' --frames 20 --plot '" + plot + "'");
+    ASSERT_EQ(bench.exit_code, 0) << bench.err;
+    EXPECT_NE(bench.out.find("20 frames"), std::string::npos);
+    EXPECT_NE(bench.out.find("p99 ms"), std::string::npos);
+    EXPECT_NE(bench.out.find("landmarks"), std::string::npos);
+    EXPECT_FALSE(cv::imread(plot).empty());
+    std::filesystem::remove_all(dir);
 }
 
 TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {

@@ -6,6 +6,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <thread>
 
@@ -51,10 +55,16 @@ TEST(Tracker, StagesSayWhatIsNotAvailable) {
     ASSERT_EQ(stages.size(), 6u);
     EXPECT_EQ(stages[0].name, "detect");
     EXPECT_TRUE(stages[0].available);
-    for (std::size_t i = 1; i < stages.size(); ++i) {
+    // Without a landmark model neither landmarks nor the fit can run; CNN and gaze are not built.
+    for (std::size_t i = 1; i < 5; ++i) {
         EXPECT_FALSE(stages[i].available) << stages[i].name;
         EXPECT_EQ(stages[i].detail.rfind("not available", 0), 0u) << stages[i].detail;
     }
+    EXPECT_EQ(stages[5].name, "filter");
+    EXPECT_TRUE(stages[5].available);
+    TrackerConfig config;
+    config.filter.enabled = false;
+    EXPECT_FALSE(Tracker(faceOnly(), config).stages()[5].available);
 }
 
 TEST(Tracker, MaxFacesLimitsTheResult) {
@@ -108,27 +118,143 @@ TEST(Tracker, TrackersOnThreadsShareOneModel) {
 namespace facetrack {
 namespace {
 
-TEST(Tracker, LandmarksStageFillsLandmarksWhenItsModelIsShipped) {
-    FACETRACK_REQUIRE_SHARED();
-    if (!std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm")) {
-        GTEST_SKIP() << "models/landmarks_lbf.ftm is not shipped";
-    }
+bool shipped() { return std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm"); }
+
+#define FACETRACK_REQUIRE_PIPELINE()                                                        \
+    do {                                                                                    \
+        FACETRACK_REQUIRE_SHARED();                                                         \
+        if (!shipped()) GTEST_SKIP() << "models/landmarks_lbf.ftm is not shipped";          \
+    } while (0)
+
+std::vector<std::string> stageNames(const FrameResult& r) {
+    std::vector<std::string> names;
+    for (const auto& t : r.timings) names.push_back(t.stage);
+    return names;
+}
+
+TEST(Tracker, DetectsOnceThenFollowsWithLandmarksPoseAndExpression) {
+    FACETRACK_REQUIRE_PIPELINE();
     Tracker tracker(Models::loadDefault());
     EXPECT_TRUE(tracker.stages()[1].available);
-    for (const auto& frame : clipFrames(3)) {
-        const FrameResult result = tracker.process(core::viewOf(frame), 0.0);
-        ASSERT_EQ(result.faces.size(), 1u);
-        ASSERT_TRUE(result.faces[0].landmarks.has_value());
-        const Box& box = result.faces[0].box;
-        const float margin = 0.25f * box.width();
-        for (const auto& p : *result.faces[0].landmarks) {
-            EXPECT_GT(p.x, box.x0 - margin);
-            EXPECT_LT(p.x, box.x1 + margin);
-            EXPECT_GT(p.y, box.y0 - margin);
-            EXPECT_LT(p.y, box.y1 + margin);
+    EXPECT_TRUE(tracker.stages()[2].available);
+    const auto frames = clipFrames(20);
+    int id = -1;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const FrameResult result = tracker.process(core::viewOf(frames[i]), i / 25.0);
+        ASSERT_EQ(result.faces.size(), 1u) << "frame " << i;
+        const FaceResult& face = result.faces[0];
+        ASSERT_TRUE(face.landmarks && face.pose && face.expression && face.fit_residual);
+        ASSERT_TRUE(face.raw.landmarks && face.raw.pose && face.raw.expression);
+        EXPECT_FALSE(face.gaze.has_value());
+        EXPECT_EQ(face.tracked, i > 0);
+        if (i == 0) id = face.id;
+        EXPECT_EQ(face.id, id);
+        EXPECT_LT(*face.fit_residual, 0.08f);
+        // A webcam user: 20 cm to 2 m in front of the camera, facing it.
+        EXPECT_GT(face.pose->translation_mm.z, 200.f);
+        EXPECT_LT(face.pose->translation_mm.z, 2000.f);
+        EXPECT_LT(std::abs(face.pose->euler_deg.y), 45.f);
+        for (const float w : face.expression->arkit) {
+            EXPECT_GE(w, 0.f);
+            EXPECT_LE(w, 1.f);
         }
-        ASSERT_EQ(result.timings.size(), 2u);
-        EXPECT_EQ(result.timings[1].stage, "landmarks");
+        const Box& box = face.box;
+        for (const auto& p : *face.landmarks) {
+            EXPECT_GT(p.x, box.x0 - 0.3f * box.width());
+            EXPECT_LT(p.x, box.x1 + 0.3f * box.width());
+        }
+        const auto names = stageNames(result);
+        EXPECT_EQ(std::count(names.begin(), names.end(), "detect"), i == 0 ? 1 : 0) << "frame " << i;
+        EXPECT_NE(std::find(names.begin(), names.end(), "fit"), names.end());
+        EXPECT_GT(result.camera.fx, 0.f);
+    }
+}
+
+// The face leaves (frames blanked) and comes back: no face while it is away,
+// re-detected as soon as it returns, under a new id.
+TEST(Tracker, ReDetectsAfterTheFaceLeavesAndComesBack) {
+    FACETRACK_REQUIRE_PIPELINE();
+    auto frames = clipFrames(45);
+    for (int i = 15; i < 30; ++i) frames[i].setTo(cv::Scalar::all(0));
+    Tracker tracker(Models::loadDefault());
+    std::vector<int> ids;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const FrameResult r = tracker.process(core::viewOf(frames[i]), i / 25.0);
+        if (i >= 15 && i < 30) {
+            EXPECT_TRUE(r.faces.empty()) << "frame " << i << " is blank";
+            continue;
+        }
+        ASSERT_EQ(r.faces.size(), 1u) << "frame " << i;
+        ids.push_back(r.faces[0].id);
+        const auto names = stageNames(r);
+        EXPECT_EQ(std::count(names.begin(), names.end(), "detect"), i == 0 || i == 30 ? 1 : 0) << "frame " << i;
+    }
+    EXPECT_EQ(ids.front(), ids[14]);
+    EXPECT_NE(ids[14], ids[15]);  // frame 30: a new track
+}
+
+double landmarkJitter(const std::vector<Landmarks68>& track) {
+    double sum = 0;
+    int n = 0;
+    for (std::size_t t = 1; t + 1 < track.size(); ++t) {
+        const double eyes = std::hypot(track[t][36].x - track[t][45].x, track[t][36].y - track[t][45].y);
+        for (int i = 0; i < 68; ++i) {
+            const double dx = track[t + 1][i].x - 2 * track[t][i].x + track[t - 1][i].x;
+            const double dy = track[t + 1][i].y - 2 * track[t][i].y + track[t - 1][i].y;
+            sum += (dx * dx + dy * dy) / (eyes * eyes);
+            ++n;
+        }
+    }
+    return std::sqrt(sum / n);
+}
+
+TEST(Tracker, FilterLowersJitterAndKeepsRawValues) {
+    FACETRACK_REQUIRE_PIPELINE();
+    Tracker tracker(Models::loadDefault());
+    std::vector<Landmarks68> filtered, raw;
+    const auto frames = clipFrames(60);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const FrameResult r = tracker.process(core::viewOf(frames[i]), i / 25.0);
+        ASSERT_EQ(r.faces.size(), 1u);
+        filtered.push_back(*r.faces[0].landmarks);
+        raw.push_back(*r.faces[0].raw.landmarks);
+    }
+    const double f = landmarkJitter(filtered), u = landmarkJitter(raw);
+    std::printf("jitter: filtered %.4f, raw %.4f\n", f, u);
+    EXPECT_LT(f, 0.8 * u);
+}
+
+TEST(Tracker, CalibratesIdentityAndResetsIt) {
+    FACETRACK_REQUIRE_PIPELINE();
+    TrackerConfig config;
+    config.calibration_frames = 4;  // samples every 5 frames: calibrated by frame 16
+    Tracker tracker(Models::loadDefault(), config);
+    const auto frames = clipFrames(25);
+    FaceResult last;
+    for (std::size_t i = 0; i < frames.size(); ++i) last = tracker.process(core::viewOf(frames[i]), i / 25.0).faces.at(0);
+    EXPECT_TRUE(last.identity_calibrated);
+    EXPECT_EQ(static_cast<int>(last.identity.size()), tracker.models().face->identityCount());
+    tracker.resetIdentity();
+    const FaceResult after = tracker.process(core::viewOf(frames.back()), 1.0).faces.at(0);
+    EXPECT_FALSE(after.identity_calibrated);
+    EXPECT_TRUE(after.identity.empty());
+}
+
+TEST(Tracker, FollowsTwoFacesWithTheirOwnIds) {
+    FACETRACK_REQUIRE_PIPELINE();
+    const auto frames = clipFrames(5);
+    TrackerConfig config;
+    config.max_faces = 2;
+    Tracker tracker(Models::loadDefault(), config);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        cv::Mat pair;
+        cv::Mat mirrored;
+        cv::flip(frames[i], mirrored, 1);
+        cv::hconcat(frames[i], mirrored, pair);
+        const FrameResult r = tracker.process(core::viewOf(pair), i / 25.0);
+        ASSERT_EQ(r.faces.size(), 2u) << "frame " << i;
+        EXPECT_NE(r.faces[0].id, r.faces[1].id);
+        EXPECT_GT(std::abs(r.faces[0].box.x0 - r.faces[1].box.x0), frames[i].cols / 4.f);
     }
 }
 

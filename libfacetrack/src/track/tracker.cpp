@@ -76,6 +76,7 @@ constexpr float kMaxOutsideShare = 0.25f;   // landmarks outside the frame
 constexpr double kMaxPitchDeg = 70.0, kMaxYawDeg = 80.0;
 constexpr double kMinDepthCm = 10.0, kMaxDepthCm = 1000.0;
 constexpr float kMinEyeCornersPx = 8.f;
+constexpr double kMinFaceContrast = 4.0;   // grey-level standard deviation inside the landmarks' box
 constexpr int kCalibrationStride = 5;       // frames between calibration samples
 constexpr int kVerifyCropWidth = 128;       // px: the verification crop is detected at this width
 constexpr float kTranslationScaleMm = 90.f; // ~ an eye-corner distance: the filter's unit of translation speed
@@ -171,6 +172,15 @@ bool Tracker::Impl::findLandmarks(track::FaceTrack& face) {
     int outside = 0;
     for (int i = 0; i < landmarks::kLandmarks; ++i) outside += !contains(frame, face.shape(0, i), face.shape(1, i));
     face.box = boundsOf(face.shape);
+    // A face has texture: a covered lens or a blanked frame has none, yet the
+    // regression still returns a plausible shape there.
+    const cv::Rect region = cv::Rect(cvRound(face.box.x0), cvRound(face.box.y0), cvRound(face.box.width()) + 1,
+                                     cvRound(face.box.height()) + 1) &
+                            cv::Rect(0, 0, gray.cols, gray.rows);
+    if (region.area() <= 0) return false;
+    cv::Scalar mean, deviation;
+    cv::meanStdDev(gray(region), mean, deviation);
+    if (deviation[0] < kMinFaceContrast) return false;
     return outside <= kMaxOutsideShare * landmarks::kLandmarks &&
            fit::eyeCornerDistance(face.shape.cast<double>()) >= kMinEyeCornersPx;
 }
