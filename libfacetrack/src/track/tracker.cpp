@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 
@@ -388,6 +389,8 @@ std::vector<StageInfo> Tracker::stages() const {
     const auto& lbf = impl_->models.landmarks;
     const auto& basis = *impl_->fit_basis;
     const auto& filter = impl_->config.filter;
+    char filterDetail[96];
+    std::snprintf(filterDetail, sizeof filterDetail, "1-euro (min cutoff %g Hz, beta %g)", filter.min_cutoff_hz, filter.beta);
     return {
         {"detect", true, detector.kind() + " (" + detector.modelPath() + "), when no face is followed"},
         lbf ? StageInfo{"landmarks", true,
@@ -399,8 +402,7 @@ std::vector<StageInfo> Tracker::stages() const {
             : StageInfo{"fit", false, "not available: needs the landmarks stage"},
         {"cnn", false, "not available: the CNN refinement cascade is not built yet"},
         {"gaze", false, "not available: eye gaze is not built yet"},
-        filter.enabled ? StageInfo{"filter", true, "1-euro (min cutoff " + std::to_string(filter.min_cutoff_hz) +
-                                                       " Hz, beta " + std::to_string(filter.beta) + ")"}
+        filter.enabled ? StageInfo{"filter", true, filterDetail}
                        : StageInfo{"filter", false, "off (TrackerConfig::filter.enabled)"},
     };
 }
