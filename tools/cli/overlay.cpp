@@ -50,6 +50,8 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
             const auto vertices = model_.vertices(face.identity, face.expression->native);
             std::vector<cv::Point3f> cam(vertices.size());
             for (std::size_t i = 0; i < vertices.size(); ++i) cam[i] = projector.toCamera(vertices[i]);
+            // Drawn on a copy and blended at 35 %: the face stays visible under the wires.
+            cv::Mat layer = bgr.clone();
             const cv::Scalar mesh(170, 200, 120);
             for (const auto& t : face_triangles_) {
                 const cv::Point3f &a = cam[t[0]], &b = cam[t[1]], &c = cam[t[2]];
@@ -57,9 +59,10 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
                 if ((b - a).cross(c - a).dot(a) >= 0) continue;  // faces away from the camera
                 const cv::Point pa = fixedPoint(projector.project(a)), pb = fixedPoint(projector.project(b)),
                                 pc = fixedPoint(projector.project(c));
-                cv::line(bgr, pa, pb, mesh, 1, cv::LINE_8, kShift);
-                cv::line(bgr, pb, pc, mesh, 1, cv::LINE_8, kShift);
+                cv::line(layer, pa, pb, mesh, 1, cv::LINE_8, kShift);
+                cv::line(layer, pb, pc, mesh, 1, cv::LINE_8, kShift);
             }
+            cv::addWeighted(layer, 0.35, bgr, 0.65, 0.0, bgr);
             // Model axes, 50 mm long: x red (subject's left), y green (up), z blue (out of the face).
             const Vec3 o = vertices[axes_origin_];
             const cv::Point2f origin = projector.project(projector.toCamera(o));
