@@ -64,8 +64,8 @@ struct FaceEstimates {
 struct FaceResult {
     int id = 0;               ///< stable while the face is followed; a face found again gets a new id
     bool tracked = false;     ///< true when followed from the previous frame, false when freshly detected
-    /// 0..1: the detector's score for a fresh face; once fitted,
-    /// 1 - fit_residual / TrackerConfig::max_fit_residual.
+    /// 0..1: 1 - fit_residual / TrackerConfig::max_fit_residual once fitted;
+    /// the detector's score when the landmarks stage is not available.
     float confidence = 0.f;
     Box box;                  ///< the landmarks' bounding box; the detector's box when there are no landmarks
     std::optional<Landmarks68> landmarks;

@@ -16,7 +16,6 @@ struct FaceTrack {
     int id = 0;
     bool fresh = true;          ///< found by the detector this frame: start the landmarks from `box`
     Box box;                    ///< detector box (fresh) or the landmarks' bounds
-    float detection_score = 0.f;
     long last_frame = -1;       ///< the frame it was last advanced in
     int age = 0;                ///< frames followed
     bool lost = false;          ///< failed this frame: dropped before the results

@@ -148,7 +148,6 @@ void Tracker::Impl::detectNewFaces(const ImageView& frame) {
         track::FaceTrack face;
         face.id = next_id++;
         face.box = d.box;
-        face.detection_score = d.score;
         const filter::OneEuroSettings f{config.filter.min_cutoff_hz, config.filter.beta, config.filter.derivative_cutoff_hz};
         face.landmark_filter = face.rotation_filter = face.translation_filter = face.expression_filter =
             filter::OneEuroFilter(f);
