@@ -2,6 +2,9 @@
 
 #include <ceres/rotation.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace facetrack::fit {
 
 LandmarksCost::LandmarksCost(const Inputs& inputs, bool withIdentity) : in_(inputs), with_identity_(withIdentity) {
@@ -84,21 +87,16 @@ bool LandmarksCost::Evaluate(double const* const* parameters, double* residuals,
     return true;
 }
 
-PullTowards::PullTowards(int size, const double* ref)
-    : size_(size), ref_(ref), sqrt_weights_(Eigen::VectorXd::Zero(size)) {
+ShrinkToZero::ShrinkToZero(int size, double weight) : size_(size), sqrt_weight_(std::sqrt(std::max(weight, 0.0))) {
     set_num_residuals(size);
     mutable_parameter_block_sizes()->push_back(size);
 }
 
-void PullTowards::setWeights(const Eigen::VectorXd& weights) { sqrt_weights_ = weights.cwiseMax(0.0).cwiseSqrt(); }
-
-bool PullTowards::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-    for (int k = 0; k < size_; ++k) {
-        residuals[k] = sqrt_weights_[k] * (parameters[0][k] - (ref_ ? ref_[k] : 0.0));
-    }
+bool ShrinkToZero::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+    for (int k = 0; k < size_; ++k) residuals[k] = sqrt_weight_ * parameters[0][k];
     if (jacobians && jacobians[0]) {
         Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[0], size_, size_) =
-            sqrt_weights_.asDiagonal();
+            Eigen::MatrixXd::Identity(size_, size_) * sqrt_weight_;
     }
     return true;
 }

@@ -49,21 +49,18 @@ private:
     bool with_identity_;
 };
 
-/// r = sqrt(w_k) (x_k - ref_k): a Gaussian prior on a parameter block, towards
-/// zero (ref null) or towards values read through `ref` (the previous frame).
-/// The weights can change between solves (zero switches the prior off).
-class PullTowards final : public ceres::CostFunction {
+/// r = sqrt(w) x: a zero-mean Gaussian prior on a parameter block (the L2 on
+/// expressions, the identity prior). The warm fit's temporal priors are added
+/// by FaceFitter::solveWarm itself.
+class ShrinkToZero final : public ceres::CostFunction {
 public:
-    PullTowards(int size, const double* ref);
-    void setWeights(const Eigen::VectorXd& weights);  ///< one per element
-    void setWeight(double weight) { setWeights(Eigen::VectorXd::Constant(size_, weight)); }
+    ShrinkToZero(int size, double weight);
 
     bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
 private:
     int size_;
-    const double* ref_;
-    Eigen::VectorXd sqrt_weights_;
+    double sqrt_weight_;
 };
 
 }  // namespace facetrack::fit

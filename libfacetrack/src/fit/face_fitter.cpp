@@ -122,13 +122,8 @@ FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings&
     problem_ = std::make_unique<ceres::Problem>();
     landmarks_ = new LandmarksCost({basis_.get(), &base_, &camera_, observed_.data(), &scale_, settings_.huber}, false);
     problem_->AddResidualBlock(landmarks_, nullptr, pose_.data(), expression_.data());
-    expression_l2_ = new PullTowards(expressions, nullptr);
-    expression_l2_->setWeight(settings_.expression_l2);
-    problem_->AddResidualBlock(expression_l2_, nullptr, expression_.data());
-    expression_temporal_ = new PullTowards(expressions, previous_expression_.data());
-    problem_->AddResidualBlock(expression_temporal_, nullptr, expression_.data());
-    pose_temporal_ = new PullTowards(6, previous_pose_.data());
-    problem_->AddResidualBlock(pose_temporal_, nullptr, pose_.data());
+    // Cold fits only: no previous frame, so no temporal prior here.
+    problem_->AddResidualBlock(new ShrinkToZero(expressions, settings_.expression_l2), nullptr, expression_.data());
     boundExpressions(*problem_, expression_.data(), expressions);
 
     residuals_.resize(2 * model::kLandmarkCount);
@@ -147,10 +142,10 @@ double FaceFitter::objective(Eigen::MatrixXd* jacobian) {
         return std::numeric_limits<double>::infinity();
     }
     double cost = residuals_.squaredNorm();
-    // The priors are diagonal quadratics: PullTowards' residuals, added here directly.
-    const double wT = warm_temporal_ ? settings_.expression_temporal : 0.0;
+    // The priors are diagonal quadratics, added here directly.
+    const double wT = settings_.expression_temporal;
     cost += settings_.expression_l2 * expression_.squaredNorm() + wT * (expression_ - previous_expression_).squaredNorm();
-    const Eigen::Matrix<double, 6, 1> wP = warm_temporal_ ? poseTemporalWeights(settings_) : Eigen::Matrix<double, 6, 1>::Zero();
+    const Eigen::Matrix<double, 6, 1> wP = poseTemporalWeights(settings_);
     cost += (wP.array() * (pose_ - previous_pose_).array().square()).sum();
     if (jacobian) {
         jacobian->leftCols<6>() = jacobian_pose_;
@@ -180,9 +175,9 @@ int FaceFitter::solveWarm(int iterations) {
         const Eigen::VectorXd expression = expression_;
         bool accepted = false;
         for (int attempt = 0; attempt < 6 && !accepted; ++attempt) {
-            Eigen::MatrixXd damped = normal_;
-            damped.diagonal() *= 1.0 + lambda;
-            step_ = damped.ldlt().solve(-gradient_);
+            damped_ = normal_;
+            damped_.diagonal() *= 1.0 + lambda;
+            step_ = ldlt_.compute(damped_).solve(-gradient_);
             pose_ = pose + step_.head<6>();
             expression_ = (expression + step_.tail(e)).cwiseMax(0.0).cwiseMin(1.0);  // projected onto the bounds
             const double next = objective(nullptr);
@@ -259,8 +254,6 @@ FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, Fac
     }
     pose_ = previous_pose_ = params.pose;
     expression_ = previous_expression_ = params.expression;
-    expression_temporal_->setWeight(warm ? settings_.expression_temporal : 0.0);
-    pose_temporal_->setWeights(warm ? poseTemporalWeights(settings_) : Eigen::VectorXd::Zero(6));
 
     auto current = [&] { return FaceParams{pose_, expression_}; };
     // Cold rounds start from the silhouette, which holds the pose steady while
@@ -278,7 +271,6 @@ FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, Fac
         report.iterations += solve(settings_.cold_iterations);
         problem_->SetParameterBlockVariable(expression_.data());
     }
-    warm_temporal_ = warm;
     if (warm) {
         chooseContour(true);
         report.iterations += solveWarm(settings_.warm_iterations);
@@ -305,9 +297,8 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
 
     ceres::Problem problem;
     std::vector<double> scales(frames.size());
-    auto* identityPrior = new PullTowards(basis.identityCount(), nullptr);
-    identityPrior->setWeight(settings.identity_prior * static_cast<double>(frames.size()));
-    problem.AddResidualBlock(identityPrior, nullptr, identity.data());
+    problem.AddResidualBlock(new ShrinkToZero(basis.identityCount(), settings.identity_prior * static_cast<double>(frames.size())),
+                             nullptr, identity.data());
     for (std::size_t f = 0; f < frames.size(); ++f) {
         auto& frame = frames[f];
         if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
@@ -315,9 +306,7 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
         auto* cost = new LandmarksCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber}, true);
         for (int i = 0; i < kJaw; ++i) cost->setSlot(i, frame.contour[i]);
         problem.AddResidualBlock(cost, nullptr, frame.params.pose.data(), frame.params.expression.data(), identity.data());
-        auto* l2 = new PullTowards(expressions, nullptr);
-        l2->setWeight(settings.expression_l2);
-        problem.AddResidualBlock(l2, nullptr, frame.params.expression.data());
+        problem.AddResidualBlock(new ShrinkToZero(expressions, settings.expression_l2), nullptr, frame.params.expression.data());
         boundExpressions(problem, frame.params.expression.data(), expressions);
     }
     ceres::Solver::Summary summary;

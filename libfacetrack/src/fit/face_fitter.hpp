@@ -16,6 +16,8 @@
 #include "fit/fit_basis.hpp"
 #include "fit/pose.hpp"
 
+#include <Eigen/Cholesky>
+
 #include <array>
 #include <memory>
 #include <vector>
@@ -68,9 +70,9 @@ ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& ba
 ContourSlots nearestContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
                             const FaceParams& params, const Landmarks2d& observed);
 
-/// Fits one face frame by frame. Holds a Ceres problem that is built once and
-/// re-solved, so that a warm fit allocates little. Not copyable: the problem
-/// points into the fitter.
+/// Fits one face frame by frame. Holds a Ceres problem (for cold fits) built
+/// once and re-solved, and the warm fit's buffers, sized once. Not copyable:
+/// the problem points into the fitter.
 class FaceFitter {
 public:
     FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings& settings);
@@ -97,7 +99,7 @@ private:
     /// the same cost functions directly: Ceres's Solve() spends ~150 us setting
     /// up per call, three times the maths of a warm frame (docs/fitting.md).
     int solveWarm(int iterations);
-    double objective(Eigen::MatrixXd* jacobian);  // residual norm^2 at pose_, expression_
+    double objective(Eigen::MatrixXd* jacobian);  // the warm objective at pose_, expression_
 
     std::shared_ptr<const FitBasis> basis_;
     FitSettings settings_;
@@ -108,20 +110,17 @@ private:
     Camera camera_;
     Landmarks2d observed_ = Landmarks2d::Zero();
     double scale_ = 1.0;
-    bool warm_temporal_ = false;  // the temporal priors are on (warm fits)
     Eigen::Matrix<double, 6, 1> pose_, previous_pose_;
     Eigen::VectorXd expression_, previous_expression_;
 
     std::unique_ptr<ceres::Problem> problem_;
     LandmarksCost* landmarks_ = nullptr;
-    PullTowards* expression_l2_ = nullptr;
-    PullTowards* expression_temporal_ = nullptr;
-    PullTowards* pose_temporal_ = nullptr;
 
     // solveWarm's buffers, sized once.
     Eigen::VectorXd residuals_;
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jacobian_pose_, jacobian_expression_;
-    Eigen::MatrixXd jacobian_, normal_;
+    Eigen::MatrixXd jacobian_, normal_, damped_;
+    Eigen::LDLT<Eigen::MatrixXd> ldlt_;
     Eigen::VectorXd gradient_, step_;
 };
 

@@ -113,7 +113,7 @@ struct Tracker::Impl {
     void detectNewFaces(const ImageView& frame);
     bool findLandmarks(track::FaceTrack& face);  // false: lost
     bool fitFace(track::FaceTrack& face);        // false: lost
-    bool verify(const track::FaceTrack& face, const cv::Mat& bgrOrGray);
+    bool verify(const track::FaceTrack& face);  // the detector finds it again on a crop of `gray`
     void calibrate(track::FaceTrack& face);
     FaceResult output(track::FaceTrack& face, double dt);
 };
@@ -203,15 +203,15 @@ void Tracker::Impl::calibrate(track::FaceTrack& face) {
     face.calibration_window.clear();
 }
 
-bool Tracker::Impl::verify(const track::FaceTrack& face, const cv::Mat& image) {
+bool Tracker::Impl::verify(const track::FaceTrack& face) {
     // A crop twice the landmarks' size, detected small: ~1 ms instead of a full-frame search.
     const float side = 2.f * std::max(face.box.width(), face.box.height());
     const float cx = 0.5f * (face.box.x0 + face.box.x1), cy = 0.5f * (face.box.y0 + face.box.y1);
     const cv::Rect wanted(cvRound(cx - side / 2), cvRound(cy - side / 2), cvRound(side), cvRound(side));
-    const cv::Rect region = wanted & cv::Rect(0, 0, image.cols, image.rows);
+    const cv::Rect region = wanted & cv::Rect(0, 0, gray.cols, gray.rows);
     if (region.area() <= 0) return false;
     const double scale = std::min(1.0, static_cast<double>(kVerifyCropWidth) / region.width);
-    cv::resize(image(region), crop, cv::Size(), scale, scale, cv::INTER_AREA);
+    cv::resize(gray(region), crop, cv::Size(), scale, scale, cv::INTER_AREA);
     for (const auto& d : detector->detect(core::viewOf(crop))) {
         const float x = region.x + 0.5f * (d.box.x0 + d.box.x1) / static_cast<float>(scale);
         const float y = region.y + 0.5f * (d.box.y0 + d.box.y1) / static_cast<float>(scale);
@@ -354,7 +354,7 @@ FrameResult Tracker::process(const ImageView& frame, double time_s) {
     if (im.config.verify_interval > 0) {
         for (auto& t : im.tracks) {
             if (t.fresh || t.age % im.config.verify_interval != 0) continue;
-            times.run("verify", [&] { t.lost = !im.verify(t, im.gray); });
+            times.run("verify", [&] { t.lost = !im.verify(t); });
         }
         dropLost();
     }
