@@ -21,31 +21,9 @@
 namespace facetrack {
 namespace {
 
-struct CliRun {
-    int exit_code = -1;
-    std::string out;
-    std::string err;
-};
+using CliRun = test::CommandRun;
 
-CliRun runCli(const std::string& args) {
-    // One file per process and call: ctest runs the CLI tests in parallel processes.
-    static int calls = 0;
-    const std::string errFile = (std::filesystem::temp_directory_path() /
-                                 ("facetrack_cli_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(calls++)))
-                                    .string();
-    const std::string cmd = std::string(FACETRACK_CLI) + " " + args + " 2>" + errFile;
-    CliRun run;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return run;
-    std::array<char, 4096> buffer;
-    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
-    const int status = pclose(pipe);
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream err(errFile);
-    run.err.assign(std::istreambuf_iterator<char>(err), {});
-    std::filesystem::remove(errFile);
-    return run;
-}
+CliRun runCli(const std::string& args) { return test::runCommand(FACETRACK_CLI, args); }
 
 std::vector<nlohmann::json> jsonLines(const std::string& text) {
     std::vector<nlohmann::json> lines;

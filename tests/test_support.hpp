@@ -5,6 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 namespace facetrack::test {
@@ -20,5 +28,33 @@ inline std::string sharedDir() { return core::sharedDirectory(); }
 
 inline std::string sourceDir() { return FACETRACK_TEST_SOURCE_DIR; }
 inline std::string shippedFaceModel() { return sourceDir() + "/models/face_model.ftm"; }
+
+struct CommandRun {
+    int exit_code = -1;
+    std::string out;
+    std::string err;
+};
+
+/// Runs `program args` through the shell, as a user would, and collects its
+/// exit code, stdout and stderr.
+inline CommandRun runCommand(const std::string& program, const std::string& args) {
+    // One file per process and call: ctest runs tests in parallel processes.
+    static int calls = 0;
+    const std::string errFile = (std::filesystem::temp_directory_path() /
+                                 ("facetrack_test_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(calls++)))
+                                    .string();
+    const std::string cmd = program + " " + args + " 2>" + errFile;
+    CommandRun run;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe) return run;
+    std::array<char, 4096> buffer;
+    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
+    const int status = pclose(pipe);
+    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream err(errFile);
+    run.err.assign(std::istreambuf_iterator<char>(err), {});
+    std::filesystem::remove(errFile);
+    return run;
+}
 
 }  // namespace facetrack::test

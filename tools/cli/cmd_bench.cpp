@@ -1,5 +1,5 @@
 #include "commands.hpp"
-#include "media.hpp"
+#include "common/media.hpp"
 #include "plot.hpp"
 
 #include "core/image.hpp"

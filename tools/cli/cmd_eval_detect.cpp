@@ -1,6 +1,6 @@
 #include "commands.hpp"
-#include "media.hpp"
-#include "../common/faces300w.hpp"
+#include "common/media.hpp"
+#include "common/faces300w.hpp"
 
 #include "core/image.hpp"
 #include "core/pts.hpp"

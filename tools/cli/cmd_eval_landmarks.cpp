@@ -1,7 +1,7 @@
 #include "ced_plot.hpp"
 #include "commands.hpp"
 #include "json.hpp"
-#include "../common/faces300w.hpp"
+#include "common/faces300w.hpp"
 
 #include "core/image.hpp"
 #include "core/pts.hpp"

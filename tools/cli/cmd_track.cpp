@@ -1,7 +1,7 @@
 #include "commands.hpp"
 #include "json.hpp"
-#include "media.hpp"
-#include "overlay.hpp"
+#include "common/media.hpp"
+#include "common/overlay.hpp"
 
 #include "core/environment.hpp"
 #include "core/image.hpp"
@@ -109,12 +109,12 @@ MediaReader openInput(const Args& args, std::string& name) {
     }
     if (args.has("--camera")) {
         name = args.get("--camera");
-        return MediaReader::openCamera(name);
+        return MediaReader::openCamera({name});
     }
-    const auto cameras = listCameras();
+    const auto cameras = CameraCapture::listDevices();
     if (!cameras.empty()) {
         name = cameras.front();
-        return MediaReader::openCamera(name);
+        return MediaReader::openCamera({name});
     }
     const std::string shared = core::sharedDirectory();
     if (!shared.empty()) {

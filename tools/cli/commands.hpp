@@ -2,7 +2,10 @@
 // The facetrack CLI's subcommands. Each returns the process exit code and
 // throws facetrack::Error for a one-line message on stderr.
 
-#include "args.hpp"
+#include "common/args.hpp"
+#include "common/media.hpp"
+#include "common/overlay.hpp"
+#include "common/tracking_options.hpp"
 
 #include "facetrack/detector.hpp"
 #include "facetrack/tracker.hpp"
@@ -18,20 +21,20 @@ int runEvalLandmarks(const std::vector<std::string>& argv);
 int runBench(const std::vector<std::string>& argv);
 int runEvalTrack(const std::vector<std::string>& argv);
 
-/// --detector auto|yunet|cascade, --yunet PATH, --min-score S: shared by every
-/// command that detects.
-inline const std::set<std::string> kDetectorOptions = {"--detector", "--yunet", "--min-score"};
-DetectorConfig detectorConfig(const Args& args);
-
-/// The tracker's options, shared by track, bench and eval-track (plus the detector's):
-/// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --filter-cutoff HZ,
-/// --filter-beta B, and the flag --no-filter.
-inline const std::set<std::string> kTrackerOptions = {"--max-faces", "--fov", "--focal", "--calibration-frames",
-                                                      "--filter-cutoff", "--filter-beta"};
-inline const std::set<std::string> kTrackerFlags = {"--no-filter"};
-TrackerConfig trackerConfig(const Args& args);
-
-/// The options of a command that tracks: the detector's and the tracker's, plus `more`.
-std::set<std::string> trackingOptions(std::set<std::string> more);
+// The tools' shared pieces, by their short names.
+using tools::Args;
+using tools::detectorConfig;
+using tools::kDetectorOptions;
+using tools::kTrackerFlags;
+using tools::kTrackerOptions;
+using tools::trackerConfig;
+using tools::trackingOptions;
+using tools::MediaFrame;
+using tools::MediaReader;
+using tools::OverlayRenderer;
+using tools::isImageFile;
+using tools::listImages;
+using tools::parseSize;
+using tools::readAllFrames;
 
 }  // namespace facetrack::cli

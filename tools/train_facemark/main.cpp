@@ -5,9 +5,9 @@
 //
 //   train_facemark [--data ../shared/data/faces300w] [--out facemark_lbf.yaml]
 
-#include "../common/tool_main.hpp"
-#include "../cli/args.hpp"
-#include "../common/faces300w.hpp"
+#include "common/tool_main.hpp"
+#include "common/args.hpp"
+#include "common/faces300w.hpp"
 #include "core/environment.hpp"
 #include "core/image.hpp"
 #include "core/pts.hpp"
@@ -34,7 +34,7 @@ bool yunetFaces(cv::InputArray image, cv::OutputArray faces, void* detector) {
 }
 
 int run(int argc, char** argv) {
-    const cli::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--data", "--out"}, {"--help"});
+    const Args args(std::vector<std::string>(argv + 1, argv + argc), {"--data", "--out"}, {"--help"});
     if (args.has("--help")) {
         std::puts("usage: train_facemark [--data ../shared/data/faces300w] [--out facemark_lbf.yaml]");
         return 0;

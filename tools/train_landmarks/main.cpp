@@ -6,9 +6,9 @@
 // Long: run it under nohup (docs/landmarks.md). After each stage it writes
 // OUT.partial; --resume continues from there. Deterministic for a given seed.
 
-#include "../common/tool_main.hpp"
-#include "../cli/args.hpp"
-#include "../common/faces300w.hpp"
+#include "common/tool_main.hpp"
+#include "common/args.hpp"
+#include "common/faces300w.hpp"
 #include "core/environment.hpp"
 #include "core/image.hpp"
 #include "core/pts.hpp"
@@ -137,7 +137,7 @@ Box jitter(const Box& b, float shift, float scale, std::mt19937_64& rng) {
 }
 
 int run(int argc, char** argv) {
-    const cli::Args args(std::vector<std::string>(argv + 1, argv + argc),
+    const Args args(std::vector<std::string>(argv + 1, argv + argc),
                          {"--data", "--out", "--stages", "--trees", "--depth", "--inits", "--threads", "--seed", "--ridge"},
                          {"--resume", "--help"});
     if (args.has("--help")) {

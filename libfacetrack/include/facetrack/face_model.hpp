@@ -23,6 +23,18 @@ struct FaceModelData;
 struct ArkitMapping;
 }
 
+/// One eyeball of the mesh, on the mean face (millimetres, model frame).
+/// Vertices [first_vertex, last_vertex] are its sclera and iris; gaze turns
+/// them about `centre`, away from `optical_axis` (where the eye looks at rest).
+struct EyeballGeometry {
+    int first_vertex = 0;
+    int last_vertex = 0;
+    Vec3 centre;
+    Vec3 optical_axis;
+    float radius_mm = 0.f;
+    float iris_radius_mm = 0.f;
+};
+
 class FaceModel {
 public:
     /// Reads a model file. Throws facetrack::Error naming the file when it is
@@ -60,6 +72,12 @@ public:
 
     /// The mesh's triangles, as indices into vertices().
     std::vector<std::array<int, 3>> triangles() const;
+    /// Vertices [0, faceVertexCount()) are the face's skin; the rest are the
+    /// back of the head, neck, eyes, mouth interior.
+    int faceVertexCount() const;
+    /// The subject's left (+x) and right (-x) eyeballs.
+    EyeballGeometry leftEyeball() const;
+    EyeballGeometry rightEyeball() const;
 
     /// Internal representation, for facetrack's own stages.
     const model::FaceModelData& data() const { return *data_; }

@@ -3,6 +3,7 @@
 /// Everything in facetrack's public API.
 
 #include "facetrack/arkit.hpp"
+#include "facetrack/capture.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"

@@ -76,4 +76,19 @@ std::vector<std::array<int, 3>> FaceModel::triangles() const {
     return out;
 }
 
+int FaceModel::faceVertexCount() const { return static_cast<int>(data_->face_vertex_count); }
+
+namespace {
+
+EyeballGeometry publicEyeball(const model::Eyeball& eye) {
+    const auto mm = [](const Eigen::Vector3f& v, float scale) { return Vec3{scale * v.x(), scale * v.y(), scale * v.z()}; };
+    return {static_cast<int>(eye.first_vertex), static_cast<int>(eye.last_vertex), mm(eye.centre, 10.f),
+            mm(eye.optical_axis, 1.f), 10.f * eye.radius, 10.f * eye.iris_radius};
+}
+
+}  // namespace
+
+EyeballGeometry FaceModel::leftEyeball() const { return publicEyeball(data_->left_eye); }
+EyeballGeometry FaceModel::rightEyeball() const { return publicEyeball(data_->right_eye); }
+
 }  // namespace facetrack

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace facetrack::cli {
+namespace facetrack::tools {
 
 class Args {
 public:
@@ -52,4 +52,4 @@ private:
     std::map<std::string, std::string> options_;
 };
 
-}  // namespace facetrack::cli
+}  // namespace facetrack::tools

@@ -1,6 +1,6 @@
-#include "commands.hpp"
+#include "common/tracking_options.hpp"
 
-namespace facetrack::cli {
+namespace facetrack::tools {
 
 DetectorConfig detectorConfig(const Args& args) {
     DetectorConfig config;
@@ -37,4 +37,4 @@ std::set<std::string> trackingOptions(std::set<std::string> more) {
     return more;
 }
 
-}  // namespace facetrack::cli
+}  // namespace facetrack::tools

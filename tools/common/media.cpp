@@ -12,7 +12,7 @@
 
 namespace fs = std::filesystem;
 
-namespace facetrack::cli {
+namespace facetrack::tools {
 
 bool isImageFile(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
@@ -30,17 +30,6 @@ std::vector<std::string> listImages(const std::string& dir) {
     }
     std::sort(images.begin(), images.end());
     return images;
-}
-
-std::vector<std::string> listCameras() {
-    std::vector<std::string> cameras;
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator("/dev", ec)) {
-        const std::string name = entry.path().filename().string();
-        if (name.rfind("video", 0) == 0) cameras.push_back(entry.path().string());
-    }
-    std::sort(cameras.begin(), cameras.end());
-    return cameras;
 }
 
 MediaReader MediaReader::open(const std::string& path) {
@@ -62,28 +51,47 @@ MediaReader MediaReader::open(const std::string& path) {
     return reader;
 }
 
-MediaReader MediaReader::openCamera(const std::string& device) {
+MediaReader MediaReader::openCamera(const CaptureSettings& settings) {
     MediaReader reader;
-    reader.video_.open(device, cv::CAP_V4L2);
-    if (!reader.video_.isOpened()) {
-        std::string found;
-        for (const auto& c : listCameras()) found += " " + c;
-        throw Error("cannot open camera '" + device + "'" +
-                    (found.empty() ? std::string(" (no /dev/video* devices exist)") : "; cameras present:" + found));
-    }
-    reader.video_name_ = device;
-    reader.fps_ = reader.video_.get(cv::CAP_PROP_FPS);
-    if (!(reader.fps_ > 0.0 && reader.fps_ < 1000.0)) reader.fps_ = 30.0;
+    reader.camera_.emplace(settings);
+    reader.video_name_ = settings.device;
+    reader.fps_ = reader.camera_->fps();
     return reader;
 }
 
+std::string MediaReader::describe() const {
+    if (camera_) return camera_->description();
+    if (video_.isOpened()) return video_name_;
+    return images_.size() == 1 ? images_.front() : std::to_string(images_.size()) + " images";
+}
+
 bool MediaReader::next(MediaFrame& frame) {
+    switch (read(frame)) {
+        case ReadStatus::Frame: return true;
+        case ReadStatus::End: return false;
+        case ReadStatus::Timeout: throw Error("camera " + video_name_ + " sent no frame in time (is it in use, or covered?)");
+        case ReadStatus::Disconnected: throw Error("camera " + video_name_ + " went away (unplugged?)");
+    }
+    return false;
+}
+
+ReadStatus MediaReader::read(MediaFrame& frame) {
+    if (camera_) {
+        const CaptureStatus status = camera_->read(captured_);
+        if (status == CaptureStatus::Timeout) return ReadStatus::Timeout;
+        if (status == CaptureStatus::Disconnected) return ReadStatus::Disconnected;
+        frame.bgr = cv::Mat(captured_.height, captured_.width, CV_8UC3, captured_.bgr.data());
+        frame.source = video_name_;
+        frame.index = video_index_++;
+        frame.time_s = captured_.timestamp_s;
+        return ReadStatus::Frame;
+    }
     if (video_.isOpened()) {
-        if (!video_.read(frame.bgr) || frame.bgr.empty()) return false;
+        if (!video_.read(frame.bgr) || frame.bgr.empty()) return ReadStatus::End;
         frame.source = video_name_;
         frame.index = video_index_++;
         frame.time_s = frame.index / fps_;
-        return true;
+        return ReadStatus::Frame;
     }
     while (next_image_ < images_.size()) {
         const std::string& path = images_[next_image_++];
@@ -95,9 +103,9 @@ bool MediaReader::next(MediaFrame& frame) {
         frame.source = path;
         frame.index = 0;
         frame.time_s = 0.0;
-        return true;
+        return ReadStatus::Frame;
     }
-    return false;
+    return ReadStatus::End;
 }
 
 std::vector<MediaFrame> readAllFrames(const std::string& path, int maxFrames, cv::Size size) {
@@ -130,4 +138,4 @@ cv::Size parseSize(const std::string& text) {
     return {w, h};
 }
 
-}  // namespace facetrack::cli
+}  // namespace facetrack::tools

@@ -1,14 +1,17 @@
 #pragma once
 // The CLI's inputs: one image, a folder of images (sorted, recursive), a video
-// clip, or a camera, read frame by frame as BGR.
+// clip, or a camera (CameraCapture), read frame by frame as BGR.
+
+#include "facetrack/capture.hpp"
 
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
-namespace facetrack::cli {
+namespace facetrack::tools {
 
 struct MediaFrame {
     std::string source;  ///< the image's path, or the clip's / camera's
@@ -17,19 +20,33 @@ struct MediaFrame {
     cv::Mat bgr;
 };
 
+enum class ReadStatus { Frame, End, Timeout, Disconnected };
+
 class MediaReader {
 public:
     /// Throws facetrack::Error with a clear message when the path does not
     /// exist or is neither an image, a folder of images nor a readable video.
     static MediaReader open(const std::string& path);
-    static MediaReader openCamera(const std::string& device);
+    /// A V4L2 camera (CameraCapture); throws its Error when it cannot be opened.
+    static MediaReader openCamera(const CaptureSettings& settings);
 
-    /// False at the end. Unreadable images in a folder are reported on stderr and skipped.
+    /// The next frame. A camera's frame is a view of the reader's buffer,
+    /// valid until the next call; clone it to keep it. Unreadable images in a
+    /// folder are reported on stderr and skipped. Timeout and Disconnected
+    /// come from cameras only.
+    ReadStatus read(MediaFrame& frame);
+    /// read(), with a camera's timeout or disconnection thrown as Error: false at the end.
     bool next(MediaFrame& frame);
+
     bool isVideo() const { return video_.isOpened(); }
+    bool isCamera() const { return camera_.has_value(); }
     double fps() const { return fps_; }
+    /// The path, or the camera's description.
+    std::string describe() const;
 
 private:
+    std::optional<CameraCapture> camera_;
+    CapturedFrame captured_;
     std::vector<std::string> images_;
     std::size_t next_image_ = 0;
     cv::VideoCapture video_;
@@ -51,7 +68,4 @@ std::vector<MediaFrame> readAllFrames(const std::string& path, int maxFrames, cv
 /// "640x480" -> cv::Size; "" -> empty size. Throws Error on anything else.
 cv::Size parseSize(const std::string& text);
 
-/// /dev/video* devices, sorted.
-std::vector<std::string> listCameras();
-
-}  // namespace facetrack::cli
+}  // namespace facetrack::tools

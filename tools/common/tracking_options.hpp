@@ -1,0 +1,29 @@
+#pragma once
+// The detector's and the tracker's command-line options, shared by every tool
+// that tracks (the CLI's track, bench and eval-track, and the demo).
+
+#include "common/args.hpp"
+
+#include "facetrack/detector.hpp"
+#include "facetrack/tracker.hpp"
+
+#include <set>
+#include <string>
+
+namespace facetrack::tools {
+
+/// --detector auto|yunet|cascade, --yunet PATH, --min-score S.
+inline const std::set<std::string> kDetectorOptions = {"--detector", "--yunet", "--min-score"};
+DetectorConfig detectorConfig(const Args& args);
+
+/// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --filter-cutoff HZ,
+/// --filter-beta B, and the flag --no-filter.
+inline const std::set<std::string> kTrackerOptions = {"--max-faces", "--fov", "--focal", "--calibration-frames",
+                                                      "--filter-cutoff", "--filter-beta"};
+inline const std::set<std::string> kTrackerFlags = {"--no-filter"};
+TrackerConfig trackerConfig(const Args& args);
+
+/// The options of a command that tracks: the detector's and the tracker's, plus `more`.
+std::set<std::string> trackingOptions(std::set<std::string> more);
+
+}  // namespace facetrack::tools
