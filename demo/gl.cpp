@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <vector>
 
 namespace facetrack::demo {
@@ -62,7 +63,7 @@ void throwOnGlError(const char* what) {
     if (error != GL_NO_ERROR) throw Error(std::string("OpenGL error ") + std::to_string(error) + " in " + what);
 }
 
-GlContext::GlContext(int width, int height, const std::string& title, bool visible)
+GlContext::GlContext(int width, int height, const std::string& title, bool visible, int samples)
     : visible_(visible), width_(width), height_(height) {
     if (width <= 0 || height <= 0) throw Error("window size must be positive");
     glfwSetErrorCallback(onGlfwError);
@@ -83,13 +84,21 @@ GlContext::GlContext(int width, int height, const std::string& title, bool visib
     }
     glfwMakeContextCurrent(window_);
     glfwSwapInterval(visible ? 1 : 0);
+    if (samples < 0) {
+        const std::string renderer = rendererName();
+        const bool software = renderer.find("llvmpipe") != std::string::npos || renderer.find("softpipe") != std::string::npos;
+        samples = software ? 0 : 4;
+    }
+    GLint most = 0;
+    glGetIntegerv(GL_MAX_SAMPLES, &most);
+    samples_ = std::min(samples, static_cast<int>(most));
 
     glGenRenderbuffers(1, &msaa_colour_);
     glBindRenderbuffer(GL_RENDERBUFFER, msaa_colour_);
-    glRenderbufferStorageMultisample(GL_RENDERBUFFER, 4, GL_RGBA8, width, height);
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples_, GL_RGBA8, width, height);
     glGenRenderbuffers(1, &msaa_depth_);
     glBindRenderbuffer(GL_RENDERBUFFER, msaa_depth_);
-    glRenderbufferStorageMultisample(GL_RENDERBUFFER, 4, GL_DEPTH_COMPONENT24, width, height);
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples_, GL_DEPTH_COMPONENT24, width, height);
     glGenFramebuffers(1, &msaa_fbo_);
     glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo_);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msaa_colour_);

