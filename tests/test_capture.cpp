@@ -2,6 +2,7 @@
 // user gets when the camera is missing or wrong. No webcam is needed.
 
 #include "capture/convert.hpp"
+#include "capture/video_device.hpp"
 #include "facetrack/capture.hpp"
 #include "facetrack/error.hpp"
 
@@ -10,6 +11,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <linux/videodev2.h>
+#include <poll.h>
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstring>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 
@@ -143,6 +151,215 @@ TEST(Capture, FilesAndNonVideoDevicesAreRefusedClearly) {
     CaptureSettings bad;
     bad.width = 0;
     EXPECT_NE(openError(bad).find("must be positive"), std::string::npos);
+}
+
+/// A scripted V4L2 camera: negotiates like a UVC driver, streams what the
+/// script says (frames, silence, an unplug) through "mapped" buffers.
+class FakeCamera final : public capture::VideoDevice {
+public:
+    enum class Event { Frame, Silence, Unplug };
+    std::vector<std::uint32_t> formats = {V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_MJPEG};
+    int max_width = 1280, max_height = 720;
+    bool busy = false;
+    std::deque<std::pair<Event, std::vector<std::uint8_t>>> script;
+
+    bool opened = false;
+    int mapped = 0;
+
+    int open(const std::string&) override {
+        opened = true;
+        return 42;
+    }
+    void close(int) override { opened = false; }
+    void* mmap(std::size_t length, int, std::int64_t offset) override {
+        ++mapped;
+        return buffers_.at(static_cast<std::size_t>(offset) / length).data();
+    }
+    void munmap(void*, std::size_t) override { --mapped; }
+    int poll(int, int, short& revents) override {
+        if (script.empty()) return 0;  // nothing comes: the caller's timeout
+        auto [event, payload] = script.front();
+        script.pop_front();
+        if (event == Event::Silence) return 0;
+        if (event == Event::Unplug) {
+            unplugged_ = true;
+            revents = POLLERR;
+            return 1;
+        }
+        pending_ = payload;
+        revents = POLLIN;
+        return 1;
+    }
+    int ioctl(int, unsigned long request, void* arg) override {
+        if (unplugged_) return fail(ENODEV);
+        switch (request) {
+            case VIDIOC_QUERYCAP: {
+                auto* cap = static_cast<v4l2_capability*>(arg);
+                std::strcpy(reinterpret_cast<char*>(cap->card), "Fake Cam");
+                cap->capabilities = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+                return 0;
+            }
+            case VIDIOC_ENUM_FMT: {
+                auto* desc = static_cast<v4l2_fmtdesc*>(arg);
+                if (desc->index >= formats.size()) return fail(EINVAL);
+                desc->pixelformat = formats[desc->index];
+                return 0;
+            }
+            case VIDIOC_S_FMT: {
+                if (busy) return fail(EBUSY);
+                auto& pix = static_cast<v4l2_format*>(arg)->fmt.pix;
+                if (std::find(formats.begin(), formats.end(), pix.pixelformat) == formats.end()) pix.pixelformat = formats[0];
+                pix.width = std::min<std::uint32_t>(pix.width, max_width);
+                pix.height = std::min<std::uint32_t>(pix.height, max_height);
+                pix.bytesperline = pix.pixelformat == V4L2_PIX_FMT_YUYV ? 2 * pix.width : 0;
+                size_ = 2 * pix.width * pix.height;
+                return 0;
+            }
+            case VIDIOC_S_PARM: return 0;
+            case VIDIOC_REQBUFS:
+                static_cast<v4l2_requestbuffers*>(arg)->count = 4;
+                buffers_.assign(4, std::vector<std::uint8_t>(size_));
+                return 0;
+            case VIDIOC_QUERYBUF: {
+                auto* buf = static_cast<v4l2_buffer*>(arg);
+                buf->length = static_cast<std::uint32_t>(size_);
+                buf->m.offset = buf->index * static_cast<std::uint32_t>(size_);
+                return 0;
+            }
+            case VIDIOC_QBUF: queued_.push_back(static_cast<v4l2_buffer*>(arg)->index); return 0;
+            case VIDIOC_STREAMON:
+            case VIDIOC_STREAMOFF: return 0;
+            case VIDIOC_DQBUF: {
+                if (queued_.empty()) return fail(EAGAIN);
+                auto* buf = static_cast<v4l2_buffer*>(arg);
+                buf->index = queued_.front();
+                queued_.pop_front();
+                auto& memory = buffers_[buf->index];
+                std::copy_n(pending_.begin(), std::min(pending_.size(), memory.size()), memory.begin());
+                buf->bytesused = static_cast<std::uint32_t>(std::min(pending_.size(), memory.size()));
+                return 0;
+            }
+            default: return fail(EINVAL);
+        }
+    }
+
+private:
+    static int fail(int error) {
+        errno = error;
+        return -1;
+    }
+    std::size_t size_ = 0;
+    std::vector<std::vector<std::uint8_t>> buffers_;
+    std::deque<std::uint32_t> queued_;
+    std::vector<std::uint8_t> pending_;
+    bool unplugged_ = false;
+};
+
+/// A uniform YUYV frame.
+std::vector<std::uint8_t> yuyvFrame(int width, int height, std::uint8_t y, std::uint8_t u, std::uint8_t v) {
+    std::vector<std::uint8_t> frame(static_cast<std::size_t>(width) * height * 2);
+    for (std::size_t i = 0; i < frame.size(); i += 4) frame[i] = y, frame[i + 1] = u, frame[i + 2] = y, frame[i + 3] = v;
+    return frame;
+}
+
+// /dev/null passes the "is it a character device" check; the fake answers the rest.
+CaptureSettings fakeSettings(int width = 640, int height = 480) {
+    CaptureSettings s;
+    s.device = "/dev/null";
+    s.width = width;
+    s.height = height;
+    s.timeout_ms = 200;
+    return s;
+}
+
+TEST(CaptureStream, NegotiatesStreamsAndConvertsYuyvFrames) {
+    auto fake = std::make_shared<FakeCamera>();
+    fake->script = {{FakeCamera::Event::Frame, yuyvFrame(640, 480, 126, 128, 128)},
+                    {FakeCamera::Event::Frame, yuyvFrame(640, 480, 16, 128, 128)}};
+    CameraCapture camera(fakeSettings(), fake);
+    EXPECT_EQ(camera.format(), CaptureFormat::Yuyv);
+    EXPECT_EQ(camera.description(), "Fake Cam (/dev/null): YUYV 640x480 at 30 fps");
+    EXPECT_EQ(fake->mapped, 4);
+    CapturedFrame frame;
+    ASSERT_EQ(camera.read(frame), CaptureStatus::Frame);
+    EXPECT_EQ(frame.width, 640);
+    EXPECT_EQ(frame.height, 480);
+    EXPECT_EQ(frame.sequence, 1u);
+    EXPECT_NEAR(frame.bgr[3 * (240 * 640 + 320)], 128, 2);
+    const std::uint8_t* before = frame.bgr.data();
+    ASSERT_EQ(camera.read(frame), CaptureStatus::Frame);
+    EXPECT_EQ(frame.bgr.data(), before) << "the frame buffer should be reused";
+    EXPECT_EQ(frame.sequence, 2u);
+    EXPECT_LE(frame.bgr[0], 1);
+    EXPECT_EQ(camera.read(frame), CaptureStatus::Timeout);  // the script ran out
+}
+
+TEST(CaptureStream, AutoFormatWeighsDecodingAgainstBandwidth) {
+    auto both = std::make_shared<FakeCamera>();
+    EXPECT_EQ(CameraCapture(fakeSettings(640, 480), both).format(), CaptureFormat::Yuyv);
+    EXPECT_EQ(CameraCapture(fakeSettings(1280, 720), both).format(), CaptureFormat::Mjpeg);
+    auto mjpegOnly = std::make_shared<FakeCamera>();
+    mjpegOnly->formats = {V4L2_PIX_FMT_MJPEG};
+    EXPECT_EQ(CameraCapture(fakeSettings(640, 480), mjpegOnly).format(), CaptureFormat::Mjpeg);
+    auto small = std::make_shared<FakeCamera>();
+    small->max_width = 320, small->max_height = 240;
+    const CameraCapture nearest(fakeSettings(640, 480), small);
+    EXPECT_EQ(nearest.width(), 320);  // the driver's nearest size is what we report
+    EXPECT_EQ(nearest.height(), 240);
+}
+
+TEST(CaptureStream, DropsCorruptMjpegFramesAndDeliversTheNextGoodOne) {
+    auto fake = std::make_shared<FakeCamera>();
+    fake->formats = {V4L2_PIX_FMT_MJPEG};
+    cv::Mat image(480, 640, CV_8UC3, cv::Scalar(30, 140, 220));
+    std::vector<std::uint8_t> jpeg;
+    ASSERT_TRUE(cv::imencode(".jpg", image, jpeg));
+    std::vector<std::uint8_t> torn(jpeg.begin(), jpeg.begin() + jpeg.size() / 2);
+    fake->script = {{FakeCamera::Event::Frame, torn}, {FakeCamera::Event::Frame, std::vector<std::uint8_t>(500, 0)},
+                    {FakeCamera::Event::Frame, jpeg}};
+    CameraCapture camera(fakeSettings(), fake);
+    CapturedFrame frame;
+    ASSERT_EQ(camera.read(frame), CaptureStatus::Frame);
+    EXPECT_EQ(frame.sequence, 1u);
+    EXPECT_NEAR(frame.bgr[2], 220, 4);  // red channel of the good frame
+}
+
+std::string fakeOpenError(const std::shared_ptr<FakeCamera>& fake) {
+    try {
+        CameraCapture camera(fakeSettings(), fake);
+    } catch (const Error& e) {
+        EXPECT_FALSE(fake->opened) << "the device should be closed after a failed open";
+        return e.what();
+    }
+    return "";
+}
+
+TEST(CaptureStream, UnsupportedFormatsAndBusyDevicesSayWhatToDo) {
+    auto h264 = std::make_shared<FakeCamera>();
+    h264->formats = {v4l2_fourcc('H', '2', '6', '4'), v4l2_fourcc('G', 'R', 'E', 'Y')};
+    const std::string unsupported = fakeOpenError(h264);
+    EXPECT_NE(unsupported.find("does not offer YUYV or MJPEG; it offers: H264 GREY"), std::string::npos) << unsupported;
+    EXPECT_NE(unsupported.find("v4l2-ctl -d /dev/null --list-formats-ext"), std::string::npos) << unsupported;
+
+    auto busy = std::make_shared<FakeCamera>();
+    busy->busy = true;
+    const std::string message = fakeOpenError(busy);
+    EXPECT_NE(message.find("is busy: another program is using it"), std::string::npos) << message;
+}
+
+TEST(CaptureStream, UnplugIsReportedAndReleasesTheDevice) {
+    auto fake = std::make_shared<FakeCamera>();
+    fake->script = {{FakeCamera::Event::Frame, yuyvFrame(640, 480, 126, 128, 128)},
+                    {FakeCamera::Event::Silence, {}},
+                    {FakeCamera::Event::Unplug, {}}};
+    CameraCapture camera(fakeSettings(), fake);
+    CapturedFrame frame;
+    EXPECT_EQ(camera.read(frame), CaptureStatus::Frame);
+    EXPECT_EQ(camera.read(frame), CaptureStatus::Timeout);
+    EXPECT_EQ(camera.read(frame), CaptureStatus::Disconnected);
+    EXPECT_FALSE(fake->opened);
+    EXPECT_EQ(fake->mapped, 0);
+    EXPECT_EQ(camera.read(frame), CaptureStatus::Disconnected);  // and stays so, without touching the device
 }
 
 TEST(Capture, FrameViewDescribesItsPixels) {

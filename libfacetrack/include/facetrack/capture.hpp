@@ -23,6 +23,10 @@
 
 namespace facetrack {
 
+namespace capture {
+class VideoDevice;
+}
+
 enum class CaptureFormat {
     Auto,   ///< YUYV up to 640x480 (no decoding cost), MJPEG above (USB bandwidth); whichever the device has
     Yuyv,   ///< YUV 4:2:2, two bytes per pixel
@@ -63,6 +67,9 @@ class CameraCapture {
 public:
     /// Opens and starts streaming. Throws Error with a message a user can act on.
     explicit CameraCapture(const CaptureSettings& settings);
+    /// The same through other device calls than libv4l2's (facetrack's tests
+    /// stand in for a camera this way).
+    CameraCapture(const CaptureSettings& settings, std::shared_ptr<capture::VideoDevice> device);
     ~CameraCapture();
     CameraCapture(CameraCapture&&) noexcept;
     CameraCapture& operator=(CameraCapture&&) noexcept;

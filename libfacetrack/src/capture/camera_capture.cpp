@@ -4,6 +4,7 @@
 #include "facetrack/capture.hpp"
 
 #include "capture/convert.hpp"
+#include "capture/video_device.hpp"
 #include "facetrack/error.hpp"
 
 #include <libv4l2.h>
@@ -48,18 +49,50 @@ std::string presentDevices() {
     return list;
 }
 
-/// ioctl that retries when interrupted by a signal.
-int xioctl(int fd, unsigned long request, void* arg) {
-    int r;
-    do {
-        r = v4l2_ioctl(fd, request, arg);
-    } while (r == -1 && errno == EINTR);
-    return r;
-}
+class Libv4l2Device final : public capture::VideoDevice {
+public:
+    int open(const std::string& path) override {
+        const int raw = ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+        if (raw < 0) return -1;
+        // Asked before libv4l2 wraps the descriptor: it would print its own
+        // complaint about a node that is not V4L2.
+        v4l2_capability cap{};
+        int queried;
+        do {
+            queried = ::ioctl(raw, VIDIOC_QUERYCAP, &cap);
+        } while (queried == -1 && errno == EINTR);
+        if (queried != 0) {
+            ::close(raw);
+            errno = ENOTTY;
+            return -1;
+        }
+        const int fd = v4l2_fd_open(raw, V4L2_DISABLE_CONVERSION);
+        if (fd < 0) {
+            const int error = errno;
+            ::close(raw);
+            errno = error;
+        }
+        return fd;
+    }
+    void close(int fd) override { v4l2_close(fd); }
+    int ioctl(int fd, unsigned long request, void* arg) override { return v4l2_ioctl(fd, request, arg); }
+    void* mmap(std::size_t length, int fd, std::int64_t offset) override {
+        return v4l2_mmap(nullptr, length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, offset);
+    }
+    void munmap(void* start, std::size_t length) override { v4l2_munmap(start, length); }
+    int poll(int fd, int timeout_ms, short& revents) override {
+        pollfd p{fd, POLLIN, 0};
+        const int ready = ::poll(&p, 1, timeout_ms);
+        revents = p.revents;
+        return ready;
+    }
+};
 
 bool isGone(int error) { return error == ENODEV || error == ENXIO || error == EIO; }
 
 }  // namespace
+
+std::shared_ptr<capture::VideoDevice> capture::libv4l2Device() { return std::make_shared<Libv4l2Device>(); }
 
 std::string toString(CaptureFormat format) {
     switch (format) {
@@ -87,6 +120,7 @@ struct CameraCapture::Impl {
         std::size_t length = 0;
     };
 
+    std::shared_ptr<capture::VideoDevice> io;
     std::string device;
     std::string card;
     int fd = -1;
@@ -101,19 +135,29 @@ struct CameraCapture::Impl {
     std::chrono::steady_clock::time_point opened = std::chrono::steady_clock::now();
     cv::Mat decoded;  // reused between frames
 
+    explicit Impl(std::shared_ptr<capture::VideoDevice> calls) : io(std::move(calls)) {}
     ~Impl() { close(); }
+
+    /// ioctl that retries when interrupted by a signal.
+    int xioctl(unsigned long request, void* arg) {
+        int r;
+        do {
+            r = io->ioctl(fd, request, arg);
+        } while (r == -1 && errno == EINTR);
+        return r;
+    }
 
     void close() {
         if (fd < 0) return;
         if (streaming) {
             v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-            xioctl(fd, VIDIOC_STREAMOFF, &type);
+            xioctl(VIDIOC_STREAMOFF, &type);
         }
         for (auto& b : buffers) {
-            if (b.start != MAP_FAILED) v4l2_munmap(b.start, b.length);
+            if (b.start != MAP_FAILED) io->munmap(b.start, b.length);
         }
         buffers.clear();
-        v4l2_close(fd);
+        io->close(fd);
         fd = -1;
     }
 
@@ -138,31 +182,21 @@ struct CameraCapture::Impl {
         if (::stat(device.c_str(), &st) != 0) throw Error("no camera '" + device + "': " + presentDevices());
         if (!S_ISCHR(st.st_mode)) throw Error("'" + device + "' is not a device node; " + presentDevices());
 
-        const int raw = ::open(device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-        if (raw < 0) {
+        fd = io->open(device);
+        if (fd < 0) {
             const int error = errno;
             if (error == EACCES || error == EPERM) {
                 throw Error("no permission to open " + device +
                             ": add yourself to the 'video' group (sudo usermod -aG video $USER, then log in again)");
             }
+            if (error == ENOTTY) throw Error("'" + device + "' is not a V4L2 video device; " + presentDevices());
             if (error == EBUSY) fail("opening", error);
             throw Error("cannot open " + device + ": " + std::strerror(error) + "; " + presentDevices());
         }
-        // Asked before libv4l2 wraps the descriptor: it would print its own
-        // complaint about a node that is not V4L2.
         v4l2_capability cap{};
-        int queried;
-        do {
-            queried = ::ioctl(raw, VIDIOC_QUERYCAP, &cap);
-        } while (queried == -1 && errno == EINTR);
-        if (queried != 0) {
-            ::close(raw);
+        if (xioctl(VIDIOC_QUERYCAP, &cap) != 0) {
+            close();
             throw Error("'" + device + "' is not a V4L2 video device; " + presentDevices());
-        }
-        fd = v4l2_fd_open(raw, V4L2_DISABLE_CONVERSION);
-        if (fd < 0) {
-            ::close(raw);
-            throw Error("cannot open " + device + " through libv4l2");
         }
         card = reinterpret_cast<const char*>(cap.card);
         const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
@@ -186,7 +220,7 @@ struct CameraCapture::Impl {
         std::vector<std::uint32_t> formats;
         v4l2_fmtdesc desc{};
         desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        for (desc.index = 0; xioctl(fd, VIDIOC_ENUM_FMT, &desc) == 0; ++desc.index) formats.push_back(desc.pixelformat);
+        for (desc.index = 0; xioctl(VIDIOC_ENUM_FMT, &desc) == 0; ++desc.index) formats.push_back(desc.pixelformat);
         return formats;
     }
 
@@ -223,7 +257,7 @@ struct CameraCapture::Impl {
         fmt.fmt.pix.height = static_cast<std::uint32_t>(s.height);
         fmt.fmt.pix.pixelformat = fourccOf(chosen);
         fmt.fmt.pix.field = V4L2_FIELD_ANY;
-        if (xioctl(fd, VIDIOC_S_FMT, &fmt) != 0) fail("setting the format", errno);
+        if (xioctl(VIDIOC_S_FMT, &fmt) != 0) fail("setting the format", errno);
         if (fmt.fmt.pix.pixelformat != fourccOf(chosen)) {
             const std::string got = fourccName(fmt.fmt.pix.pixelformat);
             close();
@@ -245,7 +279,7 @@ struct CameraCapture::Impl {
         parm.parm.capture.timeperframe.numerator = 1000;
         parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(std::lround(requested * 1000.0));
         // Not every driver lets the rate be set; then it runs at its own.
-        if (xioctl(fd, VIDIOC_S_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0) {
+        if (xioctl(VIDIOC_S_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0) {
             fps = static_cast<double>(parm.parm.capture.timeperframe.denominator) /
                   parm.parm.capture.timeperframe.numerator;
         } else {
@@ -258,7 +292,7 @@ struct CameraCapture::Impl {
         req.count = kBufferCount;
         req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
         req.memory = V4L2_MEMORY_MMAP;
-        if (xioctl(fd, VIDIOC_REQBUFS, &req) != 0) fail("requesting buffers", errno);
+        if (xioctl(VIDIOC_REQBUFS, &req) != 0) fail("requesting buffers", errno);
         if (req.count < 2) {
             close();
             throw Error(device + " granted only " + std::to_string(req.count) + " buffer(s); at least 2 are needed");
@@ -269,9 +303,9 @@ struct CameraCapture::Impl {
             buf.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
             buf.memory = V4L2_MEMORY_MMAP;
             buf.index = i;
-            if (xioctl(fd, VIDIOC_QUERYBUF, &buf) != 0) fail("querying buffers", errno);
+            if (xioctl(VIDIOC_QUERYBUF, &buf) != 0) fail("querying buffers", errno);
             buffers[i].length = buf.length;
-            buffers[i].start = v4l2_mmap(nullptr, buf.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, buf.m.offset);
+            buffers[i].start = io->mmap(buf.length, fd, buf.m.offset);
             if (buffers[i].start == MAP_FAILED) fail("mapping buffers", errno);
         }
     }
@@ -282,10 +316,10 @@ struct CameraCapture::Impl {
             buf.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
             buf.memory = V4L2_MEMORY_MMAP;
             buf.index = i;
-            if (xioctl(fd, VIDIOC_QBUF, &buf) != 0) fail("queueing buffers", errno);
+            if (xioctl(VIDIOC_QBUF, &buf) != 0) fail("queueing buffers", errno);
         }
         v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        if (xioctl(fd, VIDIOC_STREAMON, &type) != 0) fail("starting the stream", errno);
+        if (xioctl(VIDIOC_STREAMON, &type) != 0) fail("starting the stream", errno);
         streaming = true;
         opened = std::chrono::steady_clock::now();
     }
@@ -296,24 +330,24 @@ struct CameraCapture::Impl {
         for (;;) {
             const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
             if (left.count() <= 0) return CaptureStatus::Timeout;
-            pollfd p{fd, POLLIN, 0};
-            const int ready = ::poll(&p, 1, static_cast<int>(left.count()));
+            short revents = 0;
+            const int ready = io->poll(fd, static_cast<int>(left.count()), revents);
             if (ready < 0) {
                 if (errno == EINTR) continue;
                 return disconnected();
             }
             if (ready == 0) return CaptureStatus::Timeout;
-            if (p.revents & (POLLERR | POLLHUP | POLLNVAL)) return disconnected();
+            if (revents & (POLLERR | POLLHUP | POLLNVAL)) return disconnected();
 
             v4l2_buffer buf{};
             buf.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
             buf.memory = V4L2_MEMORY_MMAP;
-            if (xioctl(fd, VIDIOC_DQBUF, &buf) != 0) {
+            if (xioctl(VIDIOC_DQBUF, &buf) != 0) {
                 if (errno == EAGAIN) continue;
                 return disconnected();
             }
             const bool ok = convert(buffers[buf.index], buf.bytesused, buf.flags, frame);
-            if (xioctl(fd, VIDIOC_QBUF, &buf) != 0) return disconnected();
+            if (xioctl(VIDIOC_QBUF, &buf) != 0) return disconnected();
             if (ok) return CaptureStatus::Frame;
         }
     }
@@ -345,7 +379,12 @@ struct CameraCapture::Impl {
     }
 };
 
-CameraCapture::CameraCapture(const CaptureSettings& settings) : impl_(std::make_unique<Impl>()) { impl_->open(settings); }
+CameraCapture::CameraCapture(const CaptureSettings& settings) : CameraCapture(settings, capture::libv4l2Device()) {}
+
+CameraCapture::CameraCapture(const CaptureSettings& settings, std::shared_ptr<capture::VideoDevice> device)
+    : impl_(std::make_unique<Impl>(std::move(device))) {
+    impl_->open(settings);
+}
 CameraCapture::~CameraCapture() = default;
 CameraCapture::CameraCapture(CameraCapture&&) noexcept = default;
 CameraCapture& CameraCapture::operator=(CameraCapture&&) noexcept = default;
