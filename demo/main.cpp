@@ -2,6 +2,7 @@
 // image folder goes through the Tracker; the window shows the image with the
 // tracker's overlay, the avatar, and the timings.
 
+#include "controls.hpp"
 #include "demo_view.hpp"
 #include "gl.hpp"
 
@@ -47,23 +48,11 @@ tracking options: --detector, --yunet, --min-score, --max-faces, --fov, --focal,
 keys: space pause, r reset identity calibration, m mirror, q or Esc quit
 )";
 
-struct Keys {
-    bool paused = false;
-    bool mirror = false;
-    bool reset_identity = false;
-};
-
 void onKey(GLFWwindow* window, int key, int, int action, int) {
     if (action != GLFW_PRESS) return;
-    auto& keys = *static_cast<Keys*>(glfwGetWindowUserPointer(window));
-    switch (key) {
-        case GLFW_KEY_SPACE: keys.paused = !keys.paused; break;
-        case GLFW_KEY_M: keys.mirror = !keys.mirror; break;
-        case GLFW_KEY_R: keys.reset_identity = true; break;
-        case GLFW_KEY_Q:
-        case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
-        default: break;
-    }
+    auto& controls = *static_cast<Controls*>(glfwGetWindowUserPointer(window));
+    controls.press(key);
+    if (controls.quit) glfwSetWindowShouldClose(window, GLFW_TRUE);
 }
 
 CaptureSettings captureSettings(const tools::Args& args) {
@@ -142,7 +131,7 @@ int run(int argc, char** argv) {
     GlContext gl(2 * panel.width, panel.height, "facetrack demo", !headless, static_cast<int>(args.number("--msaa", -1)));
     std::cerr << "facetrack_demo: rendering with " << gl.rendererName() << ", " << gl.samples() << "x multisampling\n";
     DemoView view(tracker.models().face, panel.width, panel.height);
-    Keys keys;
+    Controls keys;
     glfwSetWindowUserPointer(gl.window(), &keys);
     glfwSetKeyCallback(gl.window(), onKey);
 

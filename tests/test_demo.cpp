@@ -2,12 +2,16 @@
 // offscreen and checks what the window would show. Nothing needs a webcam.
 
 #include "avatar_renderer.hpp"
+#include "controls.hpp"
 #include "demo_view.hpp"
 #include "gl.hpp"
 #include "test_support.hpp"
 
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -161,6 +165,55 @@ TEST(Demo, AvatarEyesFollowGaze) {
     const double changed = changedShare(rest, turned);
     EXPECT_GT(changed, 0.001) << "the eyes did not turn";
     EXPECT_LT(changed, 0.05) << "more than the eyes changed";
+}
+
+TEST(Demo, KeysPauseMirrorResetAndQuit) {
+    demo::Controls controls;
+    controls.press(GLFW_KEY_SPACE);
+    controls.press(GLFW_KEY_M);
+    EXPECT_TRUE(controls.paused);
+    EXPECT_TRUE(controls.mirror);
+    controls.press(GLFW_KEY_SPACE);
+    EXPECT_FALSE(controls.paused);
+    EXPECT_FALSE(controls.reset_identity);
+    controls.press(GLFW_KEY_R);
+    EXPECT_TRUE(controls.reset_identity);
+    EXPECT_FALSE(controls.quit);
+    controls.press(GLFW_KEY_A);
+    EXPECT_FALSE(controls.quit);
+    controls.press(GLFW_KEY_ESCAPE);
+    EXPECT_TRUE(controls.quit);
+    demo::Controls other;
+    other.press(GLFW_KEY_Q);
+    EXPECT_TRUE(other.quit);
+}
+
+TEST(Demo, MirrorFlipsBothPanels) {
+    FACETRACK_REQUIRE_DISPLAY();
+    const auto model = FaceModel::loadDefault();
+    demo::GlContext gl(640, 240, "test", false);
+    demo::DemoView view(model, 320, 240);
+    cv::Mat frame(240, 320, CV_8UC3, cv::Scalar(0, 0, 0));
+    frame(cv::Rect(0, 0, 80, 240)).setTo(cv::Scalar(255, 255, 255));  // white on the left
+    FrameResult none;
+    const auto render = [&](bool mirror) {
+        gl.beginFrame(0.16f, 0.17f, 0.20f);
+        view.draw(frame, none, demo::Hud{}, mirror);
+        gl.endFrame();
+        return gl.readPixels();
+    };
+    const cv::Mat plain = render(false), mirrored = render(true);
+    // Below the HUD: the white band moves from the left edge to the right edge of the camera panel.
+    EXPECT_GT(plain.at<cv::Vec3b>(200, 10)[0], 200);
+    EXPECT_LT(plain.at<cv::Vec3b>(200, 310)[0], 50);
+    EXPECT_GT(mirrored.at<cv::Vec3b>(200, 310)[0], 200);
+    EXPECT_LT(mirrored.at<cv::Vec3b>(200, 10)[0], 50);
+    // The avatar panel is flipped as a whole, lighting included (below the HUD).
+    const cv::Rect belowHud(view.avatarPanel().x, 140, view.avatarPanel().width, 100);
+    cv::Mat flipped;
+    cv::flip(plain(belowHud), flipped, 1);
+    EXPECT_GT(changedShare(plain(belowHud), mirrored(belowHud)), 0.02) << "the lighting makes the face asymmetric";
+    EXPECT_LT(changedShare(flipped, mirrored(belowHud)), 0.01);
 }
 
 TEST(Demo, MissingCameraGivesTheClearMessage) {
