@@ -21,18 +21,24 @@ std::string& lastGlfwError() {
 
 void onGlfwError(int, const char* description) { lastGlfwError() = description ? description : "unknown"; }
 
+/// Throws Error with the info log when a shader's compile or a program's link failed.
+void throwUnless(GLuint object, GLenum status, void (*getiv)(GLuint, GLenum, GLint*),
+                 void (*getInfoLog)(GLuint, GLsizei, GLsizei*, GLchar*), void (*destroy)(GLuint), const std::string& what) {
+    GLint ok = 0;
+    getiv(object, status, &ok);
+    if (ok) return;
+    char log[2048] = {};
+    getInfoLog(object, sizeof log, nullptr, log);
+    destroy(object);
+    throw Error(what + ": " + log);
+}
+
 GLuint compileShader(GLenum type, const char* source, const std::string& name) {
     const GLuint shader = glCreateShader(type);
     glShaderSource(shader, 1, &source, nullptr);
     glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw Error(name + (type == GL_VERTEX_SHADER ? " vertex" : " fragment") + " shader: " + log);
-    }
+    throwUnless(shader, GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog, glDeleteShader,
+                name + (type == GL_VERTEX_SHADER ? " vertex" : " fragment") + " shader");
     return shader;
 }
 
@@ -47,14 +53,7 @@ GLuint linkProgram(const char* vertexSource, const char* fragmentSource, const s
     glLinkProgram(program);
     glDeleteShader(vs);
     glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
-        glDeleteProgram(program);
-        throw Error(name + " shader program: " + log);
-    }
+    throwUnless(program, GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog, glDeleteProgram, name + " shader program");
     return program;
 }
 
