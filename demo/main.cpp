@@ -170,6 +170,7 @@ int run(int argc, char** argv) {
                          std::chrono::duration<double>(Clock::now() - started).count() >= frame.time_s - firstFrameTime;
         if (pending && !keys.paused && due) {
             frame.bgr.copyTo(shown);
+            if (reader.isStillImages()) tracker.reset();  // unrelated photos: nothing to follow
             result = tracker.process(core::viewOf(shown), frame.time_s);
             pending = false;
             ++frames;

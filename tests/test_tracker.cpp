@@ -240,6 +240,22 @@ TEST(Tracker, CalibratesIdentityAndResetsIt) {
     EXPECT_TRUE(after.identity.empty());
 }
 
+TEST(Tracker, ResetStartsANewStream) {
+    FACETRACK_REQUIRE_PIPELINE();
+    Tracker tracker(Models::loadDefault());
+    const auto frames = clipFrames(3);
+    const FaceResult first = tracker.process(core::viewOf(frames[0]), 0.0).faces.at(0);
+    const FaceResult followed = tracker.process(core::viewOf(frames[1]), 0.04).faces.at(0);
+    EXPECT_TRUE(followed.tracked);
+    EXPECT_EQ(followed.id, first.id);
+    tracker.reset();
+    const FrameResult fresh = tracker.process(core::viewOf(frames[2]), 0.0);  // time may restart too
+    ASSERT_EQ(fresh.faces.size(), 1u);
+    EXPECT_FALSE(fresh.faces[0].tracked);
+    EXPECT_GT(fresh.faces[0].id, first.id);
+    EXPECT_EQ(fresh.timings.front().stage, "detect");
+}
+
 TEST(Tracker, FollowsTwoFacesWithTheirOwnIds) {
     FACETRACK_REQUIRE_PIPELINE();
     const auto frames = clipFrames(5);

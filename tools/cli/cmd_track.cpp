@@ -160,6 +160,7 @@ int runTrack(const std::vector<std::string>& argv) {
     double trackerSeconds = 0.0;
     while ((maxFrames < 0 || frames < maxFrames) && reader.next(frame)) {
         const auto start = std::chrono::steady_clock::now();
+        if (reader.isStillImages()) tracker.reset();  // unrelated photos: nothing to follow
         const FrameResult result = tracker.process(core::viewOf(frame.bgr), frame.time_s);
         trackerSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         out << frameJson(frames, frame.time_s, result, config.max_faces, raw).dump() << '\n';

@@ -101,8 +101,8 @@ ReadStatus MediaReader::read(MediaFrame& frame) {
             continue;
         }
         frame.source = path;
-        frame.index = 0;
-        frame.time_s = 0.0;
+        frame.index = static_cast<int>(next_image_ - 1);
+        frame.time_s = frame.index;
         return ReadStatus::Frame;
     }
     return ReadStatus::End;

@@ -15,8 +15,8 @@ namespace facetrack::tools {
 
 struct MediaFrame {
     std::string source;  ///< the image's path, or the clip's / camera's
-    int index = 0;       ///< frame number within the source, from 0
-    double time_s = 0.0; ///< timestamp: index / fps for clips, 0 for images
+    int index = 0;       ///< frame (or image) number within the source, from 0
+    double time_s = 0.0; ///< timestamp: index / fps for clips, index (1 s apart) for images
     cv::Mat bgr;
 };
 
@@ -39,6 +39,9 @@ public:
     bool next(MediaFrame& frame);
 
     bool isVideo() const { return video_.isOpened(); }
+    /// An image or a folder of images: each is its own scene (Tracker::reset
+    /// between them), and they are timed 1 s apart, a slideshow.
+    bool isStillImages() const { return !video_.isOpened() && !camera_; }
     bool isCamera() const { return camera_.has_value(); }
     double fps() const { return fps_; }
     /// The path, or the camera's description.

@@ -90,6 +90,11 @@ public:
     /// the mean face and calibrate again.
     void resetIdentity();
 
+    /// Forgets every followed face: the next frame is searched from scratch,
+    /// as the first of a new stream (e.g. between unrelated photos). Face ids
+    /// keep counting up.
+    void reset();
+
     /// Every pipeline stage, in order, with its availability in this build.
     std::vector<StageInfo> stages() const;
 

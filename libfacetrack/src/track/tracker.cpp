@@ -375,6 +375,11 @@ FrameResult Tracker::process(const ImageView& frame, double time_s) {
     return result;
 }
 
+void Tracker::reset() {
+    impl_->tracks.clear();
+    impl_->last_time = std::numeric_limits<double>::quiet_NaN();
+}
+
 void Tracker::resetIdentity() {
     for (auto& t : impl_->tracks) {
         t.fitter->setIdentity({});
