@@ -130,6 +130,22 @@ TEST(LbfTraining, IsDeterministicWhateverTheThreadCount) {
     EXPECT_EQ(a.samples[5].shape, b.samples[5].shape);
 }
 
+TEST(LbfModelFile, RegressionRowsAreQuantisedWithinHalfAStep) {
+    RegressionRows rows(3, 2 * kLandmarks);
+    rows.setRandom();
+    rows.row(1) *= 1e-3f;   // small rows keep their own resolution
+    rows.row(2).setZero();  // an unused leaf
+    LbfStage stage;
+    stage.setRegression(rows);
+    const RegressionRows back = stage.regressionRows();
+    for (Eigen::Index r = 0; r < rows.rows(); ++r) {
+        const float step = rows.row(r).cwiseAbs().maxCoeff() / 127.f;
+        EXPECT_LE((back.row(r) - rows.row(r)).cwiseAbs().maxCoeff(), 0.5f * step + 1e-9f) << "row " << r;
+    }
+    EXPECT_GT((back - rows).cwiseAbs().maxCoeff(), 0.f);
+    EXPECT_EQ(back.row(2).cwiseAbs().maxCoeff(), 0.f);
+}
+
 TEST(LbfModelFile, RoundTripAndCorruption) {
     TinySet set = trainTiny(30, 5);
     trainLbfStage(set.model, set.images, set.samples, tinyOptions());
@@ -141,8 +157,8 @@ TEST(LbfModelFile, RoundTripAndCorruption) {
     ASSERT_EQ(back.stages.size(), 1u);
     EXPECT_EQ(back.stages[0].splits.size(), set.model.stages[0].splits.size());
     EXPECT_EQ(back.stages[0].splits[3].threshold, set.model.stages[0].splits[3].threshold);
-    // The regression is stored in half precision.
-    EXPECT_LT((back.stages[0].regression - set.model.stages[0].regression).cwiseAbs().maxCoeff(), 2e-3f);
+    EXPECT_EQ(back.stages[0].regression, set.model.stages[0].regression);
+    EXPECT_EQ(back.stages[0].row_scale, set.model.stages[0].row_scale);
     const Shape68 start = set.samples[0].shape;
     EXPECT_LT((alignLandmarks(back, set.images[0].gray, start) - alignLandmarks(set.model, set.images[0].gray, start))
                   .cwiseAbs().maxCoeff(), 0.05f);

@@ -87,6 +87,12 @@ void writeModelFile(const std::string& path, std::string_view magic, std::uint32
 
 std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
                           const std::string& kind) {
+    std::uint32_t fileVersion = 0;
+    return readModelFile(path, magic, version, version, kind, fileVersion);
+}
+
+std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t oldest, std::uint32_t newest,
+                          const std::string& kind, std::uint32_t& fileVersion) {
     const std::string what = kind + " '" + path + "'";
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno));
@@ -100,10 +106,12 @@ std::string readModelFile(const std::string& path, std::string_view magic, std::
     std::string fileMagic(kMagicSize, '\0');
     header.getArray(fileMagic.data(), kMagicSize);
     if (fileMagic != paddedMagic(magic)) throw Error(what + ": not a " + kind + " file (wrong magic number)");
-    const auto fileVersion = header.get<std::uint32_t>();
-    if (fileVersion != version) {
-        throw Error(what + ": format version " + std::to_string(fileVersion) + ", this build reads version " +
-                    std::to_string(version) + "; regenerate the file (see models/README.md)");
+    fileVersion = header.get<std::uint32_t>();
+    if (fileVersion < oldest || fileVersion > newest) {
+        const std::string readable = oldest == newest ? "version " + std::to_string(newest)
+                                                      : "versions " + std::to_string(oldest) + " to " + std::to_string(newest);
+        throw Error(what + ": format version " + std::to_string(fileVersion) + ", this build reads " + readable +
+                    "; regenerate the file (see models/README.md)");
     }
     header.get<std::uint32_t>();
     const auto payloadSize = header.get<std::uint64_t>();

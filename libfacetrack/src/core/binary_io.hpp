@@ -109,5 +109,9 @@ void writeModelFile(const std::string& path, std::string_view magic, std::uint32
 /// another version, or fails the checksum. `kind` is a human name for messages.
 std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
                           const std::string& kind);
+/// The same for a format this build reads in versions oldest..newest; the
+/// file's version goes to `fileVersion`.
+std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t oldest, std::uint32_t newest,
+                          const std::string& kind, std::uint32_t& fileVersion);
 
 }  // namespace facetrack::core

@@ -26,14 +26,17 @@ void applyStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gra
     int count = 0;
     traverseStage(model, stage, gray, anchors, [&](int, int row) { rows[count++] = row; });
     constexpr int kAhead = 4;
+    constexpr int kRowBytes = 2 * kLandmarks;  // int8 values
     for (int k = 0; k < std::min(count, kAhead); ++k) __builtin_prefetch(stage.regression.row(rows[k]).data());
-    Eigen::Matrix<float, 1, 2 * kLandmarks> increment = Eigen::Matrix<float, 1, 2 * kLandmarks>::Zero();
+    std::array<float, 2 * kLandmarks> increment{};
     for (int k = 0; k < count; ++k) {
         if (k + kAhead < count) {
-            const float* next = stage.regression.row(rows[k + kAhead]).data();
-            for (int line = 0; line < 2 * kLandmarks * 4; line += 64) __builtin_prefetch(reinterpret_cast<const char*>(next) + line);
+            const auto* next = reinterpret_cast<const char*>(stage.regression.row(rows[k + kAhead]).data());
+            for (int line = 0; line < kRowBytes; line += 64) __builtin_prefetch(next + line);
         }
-        increment += stage.regression.row(rows[k]);
+        const std::int8_t* q = stage.regression.row(rows[k]).data();
+        const float scale = stage.row_scale[static_cast<std::size_t>(rows[k])];
+        for (int c = 0; c < 2 * kLandmarks; ++c) increment[c] += scale * static_cast<float>(q[c]);
     }
     // The increment is in the mean-shape frame: bring it back with M^{-1}'s linear part.
     const Eigen::Matrix2f back = core::alignSimilarity(shape, model.mean_shape).inverse().linear();

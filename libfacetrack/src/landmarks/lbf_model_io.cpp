@@ -22,6 +22,26 @@ Shape68 getShape(core::BinaryReader& r) {
 }
 }  // namespace
 
+void LbfStage::setRegression(const RegressionRows& rows) {
+    regression.resize(rows.rows(), 2 * kLandmarks);
+    row_scale.resize(static_cast<std::size_t>(rows.rows()));
+    for (Eigen::Index r = 0; r < rows.rows(); ++r) {
+        const float scale = rows.row(r).cwiseAbs().maxCoeff() / 127.f;
+        row_scale[static_cast<std::size_t>(r)] = scale;
+        for (int c = 0; c < 2 * kLandmarks; ++c) {
+            regression(r, c) = static_cast<std::int8_t>(scale > 0.f ? std::lround(rows(r, c) / scale) : 0);
+        }
+    }
+}
+
+RegressionRows LbfStage::regressionRows() const {
+    RegressionRows rows(regression.rows(), 2 * kLandmarks);
+    for (Eigen::Index r = 0; r < rows.rows(); ++r) {
+        rows.row(r) = row_scale[static_cast<std::size_t>(r)] * regression.row(r).cast<float>();
+    }
+    return rows;
+}
+
 void validate(const LbfModel& m, const std::string& what) {
     if (m.trees_per_landmark < 1 || m.trees_per_landmark > 64) invalid(what, "trees per landmark");
     if (m.tree_depth < 1 || m.tree_depth > 12) invalid(what, "tree depth");
@@ -38,7 +58,9 @@ void validate(const LbfModel& m, const std::string& what) {
     const auto splits = static_cast<std::size_t>(m.treesPerStage() * m.splitsPerTree());
     const auto rows = static_cast<Eigen::Index>(m.treesPerStage() * m.leavesPerTree());
     for (const auto& s : m.stages) {
-        if (s.splits.size() != splits || s.regression.rows() != rows) invalid(what, "stage size");
+        if (s.splits.size() != splits || s.regression.rows() != rows || s.row_scale.size() != std::size_t(rows)) {
+            invalid(what, "stage size");
+        }
         for (const auto& split : s.splits) {
             for (const FeaturePoint* p : {&split.a, &split.b}) {
                 for (auto a : p->anchors) {
@@ -47,7 +69,9 @@ void validate(const LbfModel& m, const std::string& what) {
                 if (!std::isfinite(p->weights[0]) || !std::isfinite(p->weights[1])) invalid(what, "feature weight");
             }
         }
-        if (!s.regression.allFinite()) invalid(what, "non-finite regression");
+        for (float scale : s.row_scale) {
+            if (!(scale >= 0.f && std::isfinite(scale))) invalid(what, "regression row scale");
+        }
     }
 }
 
@@ -67,16 +91,17 @@ void writeLbfModel(const std::string& path, const LbfModel& m) {
     w.put<std::uint32_t>(static_cast<std::uint32_t>(m.stages.size()));
     for (const auto& s : m.stages) {
         w.putVector(s.splits);
-        // Half precision halves the file; the increments are small (< 1 in
-        // mean-shape units) and need about 3 significant digits.
-        w.putHalfs(s.regression.data(), static_cast<std::size_t>(s.regression.size()));
+        // As in memory: a scale per row, then the int8 rows (version 1 had half floats).
+        w.putVector(s.row_scale);
+        w.putArray(s.regression.data(), static_cast<std::size_t>(s.regression.size()));
     }
     core::writeModelFile(path, kLbfMagic, kLbfVersion, w.bytes());
 }
 
 LbfModel readLbfModel(const std::string& path) {
     const std::string what = "landmark model '" + path + "'";
-    const std::string payload = core::readModelFile(path, kLbfMagic, kLbfVersion, "landmark model");
+    std::uint32_t version = 0;
+    const std::string payload = core::readModelFile(path, kLbfMagic, 1, kLbfVersion, "landmark model", version);
     core::BinaryReader r(payload, what);
     LbfModel m;
     m.trees_per_landmark = r.get<std::int32_t>();
@@ -100,8 +125,17 @@ LbfModel readLbfModel(const std::string& path) {
     m.stages.resize(stages);
     for (auto& s : m.stages) {
         s.splits = r.getVector<Split>();
-        s.regression.resize(m.treesPerStage() * m.leavesPerTree(), 2 * kLandmarks);
-        r.getHalfs(s.regression.data(), static_cast<std::size_t>(s.regression.size()));
+        const Eigen::Index rows = m.treesPerStage() * m.leavesPerTree();
+        if (version == 1) {
+            RegressionRows halfs(rows, 2 * kLandmarks);
+            r.getHalfs(halfs.data(), static_cast<std::size_t>(halfs.size()));
+            if (!halfs.allFinite()) r.fail("regression rows");
+            s.setRegression(halfs);
+        } else {
+            s.row_scale = r.getVector<float>();
+            s.regression.resize(rows, 2 * kLandmarks);
+            r.getArray(s.regression.data(), static_cast<std::size_t>(s.regression.size()));
+        }
     }
     r.expectEnd();
     validate(m, what);

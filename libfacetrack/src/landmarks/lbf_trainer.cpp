@@ -245,7 +245,7 @@ void trainLbfStage(LbfModel& model, const std::vector<TrainingImage>& images, st
     for (int i = 0; i < n; ++i) {
         for (int t = 0; t < trees; ++t) byLeaf[leafOf[std::size_t(i) * trees + t]].push_back(i);
     }
-    stage.regression.setZero(static_cast<Eigen::Index>(trees) * leaves, 2 * kLandmarks);
+    RegressionRows weights = RegressionRows::Zero(static_cast<Eigen::Index>(trees) * leaves, 2 * kLandmarks);
     Targets residual = targets;
     constexpr int kColumnBlocks = 8;
     std::atomic<int> blocksDone{0};
@@ -256,7 +256,7 @@ void trainLbfStage(LbfModel& model, const std::vector<TrainingImage>& images, st
             for (std::size_t row = 0; row < byLeaf.size(); ++row) {
                 const auto& members = byLeaf[row];
                 if (members.empty()) continue;
-                auto w = stage.regression.row(static_cast<Eigen::Index>(row)).segment(c0, c1 - c0);
+                auto w = weights.row(static_cast<Eigen::Index>(row)).segment(c0, c1 - c0);
                 sum = static_cast<float>(members.size()) * w.transpose();
                 for (int i : members) sum += residual.row(i).segment(c0, c1 - c0).transpose();
                 const Eigen::VectorXf update = sum / (static_cast<float>(members.size()) + o.ridge) - w.transpose();
@@ -267,6 +267,9 @@ void trainLbfStage(LbfModel& model, const std::vector<TrainingImage>& images, st
         report("global regression", double(++blocksDone) / kColumnBlocks);
     });
 
+    // Quantised before the samples move on, so that later stages learn what
+    // the run time will actually apply.
+    stage.setRegression(weights);
     model.stages.push_back(std::move(stage));
     parallelFor(n, o.threads, [&](int i) {
         applyStage(model, model.stages.back(), images[samples[i].image].gray, samples[i].shape);
