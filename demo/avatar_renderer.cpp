@@ -165,7 +165,8 @@ void AvatarRenderer::draw(const AvatarState& state, int x, int y, int width, int
     const std::size_t n = mesh.size();
 
     // Area-weighted vertex normals.
-    std::vector<glm::vec3> normals(n, glm::vec3(0.f));
+    std::vector<glm::vec3>& normals = normals_;
+    normals.assign(n, glm::vec3(0.f));
     for (std::size_t i = 0; i < indices_.size(); i += 3) {
         const glm::vec3 a = toGlm(mesh[indices_[i]]), b = toGlm(mesh[indices_[i + 1]]), c = toGlm(mesh[indices_[i + 2]]);
         const glm::vec3 face_normal = glm::cross(b - a, c - a);

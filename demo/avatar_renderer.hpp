@@ -51,7 +51,8 @@ private:
     glm::vec3 pivot_{0.f};                // the head turns about this model-frame point
     float view_distance_ = 0.f;           // mm, to frame the head
     GLuint program_ = 0, vao_ = 0, geometry_vbo_ = 0, colour_vbo_ = 0, ebo_ = 0;
-    std::vector<float> geometry_;  // per vertex: position xyz, normal xyz (reused)
+    std::vector<float> geometry_;      // per vertex: position xyz, normal xyz (reused)
+    std::vector<glm::vec3> normals_;   // per vertex, accumulated per frame (reused)
 };
 
 }  // namespace facetrack::demo
