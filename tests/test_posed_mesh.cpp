@@ -1,7 +1,7 @@
 // The mesh helpers the overlay and the avatar share: quaternion rotations and
 // eyeballs turned by gaze.
 
-#include "common/posed_mesh.hpp"
+#include "facetrack/posed_mesh.hpp"
 #include "test_support.hpp"
 
 #include <cmath>
@@ -15,10 +15,10 @@ TEST(PosedMesh, RotateAndRotateBackAreInverses) {
     const float h = std::sqrt(0.5f);
     const Quaternion quarterTurnAboutZ{h, 0.f, 0.f, h};
     const Vec3 x{1.f, 0.f, 0.f};
-    const Vec3 turned = tools::rotate(quarterTurnAboutZ, x);
+    const Vec3 turned = rotate(quarterTurnAboutZ, x);
     EXPECT_NEAR(turned.x, 0.f, 1e-6f);
     EXPECT_NEAR(turned.y, 1.f, 1e-6f);
-    const Vec3 back = tools::rotateBack(quarterTurnAboutZ, turned);
+    const Vec3 back = rotateBack(quarterTurnAboutZ, turned);
     EXPECT_NEAR(distance(back, x), 0.f, 1e-6f);
 }
 
@@ -30,7 +30,7 @@ protected:
 
 TEST_F(EyeRigTest, TurnsOnlyTheEyeballAboutItsCentre) {
     const auto eye = model->leftEyeball();
-    const tools::EyeRig rig(*model, eye);
+    const EyeRig rig(*model, eye);
     const auto rest = model->vertices({}, {});
     const Vec3 centre = rig.centre(rest);
     EXPECT_LT(distance(centre, eye.centre), 1e-3f);
@@ -63,7 +63,7 @@ TEST_F(EyeRigTest, TurnsOnlyTheEyeballAboutItsCentre) {
 }
 
 TEST_F(EyeRigTest, IgnoresDegenerateDirections) {
-    const tools::EyeRig rig(*model, model->rightEyeball());
+    const EyeRig rig(*model, model->rightEyeball());
     const auto rest = model->vertices({}, {});
     auto mesh = rest;
     rig.turn(mesh, {0.f, 0.f, 0.f});

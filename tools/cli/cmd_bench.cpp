@@ -1,5 +1,5 @@
 #include "commands.hpp"
-#include "common/media.hpp"
+#include "app/media.hpp"
 #include "plot.hpp"
 
 #include "core/image.hpp"

@@ -1,5 +1,5 @@
 #include "commands.hpp"
-#include "common/media.hpp"
+#include "app/media.hpp"
 #include "common/faces300w.hpp"
 
 #include "core/image.hpp"

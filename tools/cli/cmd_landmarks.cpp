@@ -1,6 +1,6 @@
 #include "commands.hpp"
 #include "json.hpp"
-#include "common/media.hpp"
+#include "app/media.hpp"
 
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"

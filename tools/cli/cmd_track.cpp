@@ -1,7 +1,7 @@
 #include "commands.hpp"
 #include "json.hpp"
-#include "common/media.hpp"
-#include "common/overlay.hpp"
+#include "app/media.hpp"
+#include "app/overlay.hpp"
 
 #include "core/environment.hpp"
 #include "core/image.hpp"
@@ -151,7 +151,7 @@ int runTrack(const std::vector<std::string>& argv) {
         if (!file) throw Error("cannot write '" + args.get("--out") + "'");
     }
     std::ostream& out = args.has("--out") ? file : std::cout;
-    const OverlayRenderer overlay(*tracker.models().face);
+    OverlayRenderer overlay(tracker.models().face);
     cv::VideoWriter video;
     cv::Size videoSize;
 

@@ -2,10 +2,10 @@
 // The facetrack CLI's subcommands. Each returns the process exit code and
 // throws facetrack::Error for a one-line message on stderr.
 
-#include "common/args.hpp"
-#include "common/media.hpp"
-#include "common/overlay.hpp"
-#include "common/tracking_options.hpp"
+#include "app/args.hpp"
+#include "app/media.hpp"
+#include "app/overlay.hpp"
+#include "app/tracking_options.hpp"
 
 #include "facetrack/detector.hpp"
 #include "facetrack/tracker.hpp"

@@ -14,7 +14,7 @@
 // - eyeballs: a least-squares sphere through each sclera, the iris centroid
 //   direction as the optical axis, and the radius of the flat iris disc.
 
-#include "common/tool_main.hpp"
+#include "app/tool_main.hpp"
 #include "core/environment.hpp"
 #include "facetrack/error.hpp"
 #include "ict_facekit.hpp"

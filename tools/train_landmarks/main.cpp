@@ -6,8 +6,8 @@
 // Long: run it under nohup (docs/landmarks.md). After each stage it writes
 // OUT.partial; --resume continues from there. Deterministic for a given seed.
 
-#include "common/tool_main.hpp"
-#include "common/args.hpp"
+#include "app/tool_main.hpp"
+#include "app/args.hpp"
 #include "common/faces300w.hpp"
 #include "core/environment.hpp"
 #include "core/image.hpp"

@@ -2,10 +2,12 @@
 /// \file
 /// The linear 3D face model (converted from ICT-FaceKit by tools/convert_face_model):
 ///   V(a, b) = neutral + sum_i a_i * identity_i + sum_j b_j * expression_j
-/// Units are centimetres in the model frame (see result.hpp).
+/// in the model frame (see result.hpp). Every length this API gives is in
+/// millimetres (the file stores centimetres, ICT-FaceKit's unit).
 ///
 /// A FaceModel is data: load it once, it is immutable, and one instance can be
-/// shared by any number of Trackers on any threads.
+/// shared by any number of Trackers on any threads. What the stages derive
+/// from it (the fit's basis) is built once, at load, and shared with it.
 
 #include "facetrack/arkit.hpp"
 #include "facetrack/geometry.hpp"
@@ -21,6 +23,9 @@ namespace facetrack {
 namespace model {
 struct FaceModelData;
 struct ArkitMapping;
+}
+namespace fit {
+struct FitBasis;
 }
 
 /// One eyeball of the mesh, on the mean face (millimetres, model frame).
@@ -41,9 +46,10 @@ public:
     /// missing, truncated, corrupt or of another format version.
     static std::shared_ptr<const FaceModel> load(const std::string& path);
 
-    /// The model shipped with facetrack (models/face_model.ftm), found as
-    /// described in docs/models.md.
+    /// The model shipped with facetrack: defaultPath().
     static std::shared_ptr<const FaceModel> loadDefault();
+    /// face_model.ftm in modelDirectory() (docs/models.md says where that is).
+    static std::string defaultPath();
 
     /// The file format version this build reads and writes.
     static std::uint32_t formatVersion();
@@ -69,6 +75,9 @@ public:
     /// HeadPose::rotation * v + HeadPose::translation_mm is in the camera frame.
     /// Throws Error when a vector has the wrong size.
     std::vector<Vec3> vertices(const std::vector<float>& identity, const std::vector<float>& expression) const;
+    /// The same into `out`, resized to vertexCount(): no allocation when it
+    /// already has the capacity (reuse it frame to frame).
+    void vertices(const std::vector<float>& identity, const std::vector<float>& expression, std::vector<Vec3>& out) const;
 
     /// The mesh's triangles, as indices into vertices().
     std::vector<std::array<int, 3>> triangles() const;
@@ -79,13 +88,15 @@ public:
     EyeballGeometry leftEyeball() const;
     EyeballGeometry rightEyeball() const;
 
-    /// Internal representation, for facetrack's own stages.
+    /// Internal representation and derived data, for facetrack's own stages.
     const model::FaceModelData& data() const { return *data_; }
+    const std::shared_ptr<const fit::FitBasis>& fitBasis() const { return fit_basis_; }
 
     explicit FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source);
 
 private:
     std::shared_ptr<const model::FaceModelData> data_;
+    std::shared_ptr<const fit::FitBasis> fit_basis_;
     std::string source_;
     std::vector<std::string> expression_names_;
     std::shared_ptr<const model::ArkitMapping> arkit_;

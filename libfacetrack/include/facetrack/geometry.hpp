@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Plain value types shared by the results.
+/// Plain value types shared by the results. Lengths in 3D are millimetres
+/// everywhere in the public API; image positions are pixels.
 
 #include <array>
 
@@ -36,6 +37,11 @@ struct Quaternion {
     float y = 0.f;
     float z = 0.f;
 };
+
+/// A 4x4 matrix in column-major order (OpenGL's and GLM's layout): the
+/// element in row r, column c is at index 4 c + r, so the translation of a
+/// rigid transform is at indices 12, 13, 14.
+using Mat4 = std::array<float, 16>;
 
 /// The 68 iBUG / Multi-PIE landmarks, in that point order (0-based indices;
 /// 36 and 45 are the outer eye corners).

@@ -22,8 +22,10 @@ public:
     /// Throws facetrack::Error naming the file when it is missing, truncated,
     /// corrupt or of another format version.
     static std::shared_ptr<const LandmarkModel> load(const std::string& path);
-    /// models/landmarks_lbf.ftm in modelDirectory().
+    /// The shipped model: defaultPath().
     static std::shared_ptr<const LandmarkModel> loadDefault();
+    /// landmarks_lbf.ftm in modelDirectory().
+    static std::string defaultPath();
     static std::uint32_t formatVersion();
 
     int stageCount() const;

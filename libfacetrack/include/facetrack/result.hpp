@@ -2,16 +2,19 @@
 /// \file
 /// What the Tracker returns for a frame.
 ///
-/// A stage that is not built, or did not run for a face, leaves its field
+/// A stage that is not available, or did not run for a face, leaves its field
 /// empty (std::nullopt): facetrack never fills a field with made-up values.
-/// Tracker::availableStages() tells which stages this build has.
+/// Tracker::stages() tells which stages this build and configuration have.
 ///
 /// Camera frame (for pose and gaze): OpenCV's pinhole convention. Origin at
 /// the camera centre, +x to the right of the image, +y down the image, +z
 /// forward into the scene; millimetres.
 ///
 /// Model frame (the face model's own): origin between the ears, +x towards
-/// the subject's left, +y up, +z out of the face.
+/// the subject's left, +y up, +z out of the face; millimetres.
+///
+/// OpenGL eye frame (HeadPose::gl_model_view): +x right, +y up, +z towards
+/// the viewer, i.e. the camera frame with y and z negated.
 
 #include "facetrack/arkit.hpp"
 #include "facetrack/geometry.hpp"
@@ -23,7 +26,20 @@
 
 namespace facetrack {
 
-/// Rigid head pose: x_camera = rotation * x_model + translation.
+/// Rigid head pose: x_camera = rotation * x_model + translation_mm.
+///
+/// Worked example: a face looking straight into the camera 500 mm in front of
+/// it has rotation (w, x, y, z) = (0, 1, 0, 0) (a half turn about x: model +y
+/// up becomes camera -y, up the image; model +z out of the face becomes -z,
+/// towards the camera), translation_mm (0, 0, 500), and
+///   camera_from_model = | 1  0  0   0 |      gl_model_view = | 1 0 0    0 |
+///                       | 0 -1  0   0 |                      | 0 1 0    0 |
+///                       | 0  0 -1 500 |                      | 0 0 1 -500 |
+///                       | 0  0  0   1 |                      | 0 0 0    1 |
+/// so in OpenGL the same face needs no rotation and sits 500 mm down the -z
+/// axis: load gl_model_view as the model-view matrix of the face model's mesh
+/// (FaceModel::vertices, mm) and draw it with a projection made from
+/// FrameResult::camera to overlay the video exactly.
 struct HeadPose {
     Quaternion rotation;
     /// (pitch, yaw, roll) in degrees, relative to a face looking straight at
@@ -32,6 +48,10 @@ struct HeadPose {
     /// Applied as yaw, then pitch, then roll.
     Vec3 euler_deg;
     Vec3 translation_mm;
+    /// [R t; 0 1] in the camera frame, column-major (Mat4): x_camera = M x_model.
+    Mat4 camera_from_model{};
+    /// The same transform into OpenGL's eye frame: diag(1, -1, -1, 1) camera_from_model.
+    Mat4 gl_model_view{};
 };
 
 struct ExpressionResult {
@@ -53,8 +73,9 @@ struct GazeResult {
     EyeGaze right;  ///< the subject's right eye (landmarks 36-41)
 };
 
-/// The per-frame estimates of one face. With temporal filtering on,
-/// FaceResult's own fields are filtered and `raw` holds them unfiltered.
+/// The per-frame estimates of one face before temporal filtering. Filled by the
+/// filter stage; empty when the filter is off (FaceResult's own fields are
+/// then unfiltered).
 struct FaceEstimates {
     std::optional<Landmarks68> landmarks;
     std::optional<HeadPose> pose;
@@ -67,7 +88,9 @@ struct FaceResult {
     /// 0..1: 1 - fit_residual / TrackerConfig::max_fit_residual once fitted;
     /// the detector's score when the landmarks stage is not available.
     float confidence = 0.f;
-    Box box;                  ///< the landmarks' bounding box; the detector's box when there are no landmarks
+    /// The bounding box of the unfiltered landmarks (raw.landmarks); the
+    /// detector's box when there are no landmarks.
+    Box box;
     std::optional<Landmarks68> landmarks;
     std::optional<HeadPose> pose;
     std::optional<ExpressionResult> expression;
@@ -79,7 +102,7 @@ struct FaceResult {
     /// before calibration, i.e. the mean face.
     std::vector<float> identity;
     bool identity_calibrated = false;
-    FaceEstimates raw;        ///< landmarks, pose and expression before temporal filtering
+    FaceEstimates raw;        ///< landmarks, pose and expression before temporal filtering (see FaceEstimates)
 };
 
 /// The pinhole camera the fit assumed (TrackerConfig::camera): a camera-frame
@@ -89,15 +112,18 @@ struct CameraIntrinsics {
     float cx = 0.f, cy = 0.f;
 };
 
-/// Wall-clock time one stage took on this frame.
+/// Wall-clock time one stage took on this frame, summed over faces.
 struct StageTiming {
-    std::string stage;  ///< "detect", "landmarks", "fit", ...
+    std::string stage;  ///< a name of Tracker::stages(): "detect", "verify", "landmarks", "fit", ...
     double ms = 0.0;
 };
 
+/// Everything the Tracker says about one frame. Pass the same FrameResult to
+/// Tracker::process frame after frame: its memory is reused, so tracking
+/// allocates nothing once the number of faces is steady (docs/architecture.md).
 struct FrameResult {
     std::vector<FaceResult> faces;     ///< empty: no face
-    std::vector<StageTiming> timings;  ///< in pipeline order, only stages that ran
+    std::vector<StageTiming> timings;  ///< in Tracker::stages() order, only stages that ran
     CameraIntrinsics camera;
 };
 

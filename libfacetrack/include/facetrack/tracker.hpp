@@ -1,9 +1,14 @@
 #pragma once
 /// \file
 /// The Tracker wires the stages into one pipeline:
-///   frame -> detect (when nothing is tracked) -> landmarks -> fit -> CNN -> gaze -> filter -> result
+///   frame -> detect (when fewer faces than wanted are followed) -> verify (now and then)
+///         -> per face: landmarks -> fit -> cnn -> gaze -> filter -> result
 /// docs/architecture.md shows the data flow. Stages not built yet report
 /// "not available" and leave their fields of FaceResult empty.
+///
+/// Ownership and threads: models are immutable and shared (shared_ptr) by any
+/// number of Trackers on any threads. A Tracker follows one video stream and
+/// is used by one thread at a time; run one Tracker per stream or per thread.
 
 #include "facetrack/detector.hpp"
 #include "facetrack/face_model.hpp"
@@ -17,8 +22,9 @@
 
 namespace facetrack {
 
+/// One entry of Tracker::stages(). The same names label FrameResult::timings.
 struct StageInfo {
-    std::string name;       ///< "detect", "landmarks", ...
+    std::string name;       ///< "detect", "verify", "landmarks", "fit", "cnn", "gaze", "filter"
     bool available = false;
     std::string detail;     ///< what implements it, or why it is not available
 };
@@ -34,13 +40,16 @@ struct Models {
     static Models loadDefault();
 };
 
-/// The webcam's pinhole model. Principal point: the image centre. Focal
-/// length: `focal_length_px` when positive, else from the horizontal field of
-/// view. docs/fitting.md says how to calibrate it; a wrong focal length biases
-/// depth and, a little, pitch and yaw.
+/// The webcam's pinhole model (square pixels). Focal length: `focal_length_px`
+/// when positive, else from the horizontal field of view. Principal point:
+/// (principal_x_px, principal_y_px) when both are given (>= 0), else the image
+/// centre. docs/fitting.md says how to calibrate it; a wrong focal length
+/// biases depth and, a little, pitch and yaw.
 struct CameraConfig {
     double horizontal_fov_deg = 60.0;  ///< a typical webcam
     double focal_length_px = 0.0;      ///< at the frame's resolution; 0: use the field of view
+    double principal_x_px = -1.0;      ///< at the frame's resolution, 0-based pixel centres; < 0: the image centre
+    double principal_y_px = -1.0;
 };
 
 /// The 1-euro filter on landmarks, pose and expressions (docs/fitting.md).
@@ -72,18 +81,40 @@ struct TrackerConfig {
     int calibration_frames = 30;
 };
 
-/// One Tracker follows the faces of one video stream. It is not thread-safe;
-/// use one per thread and share the (immutable) FaceModel between them.
+/// One Tracker follows the faces of one video stream. It is not thread-safe:
+/// use one per stream (or thread) and share the immutable models between them.
 class Tracker {
 public:
-    /// Throws facetrack::Error when a stage cannot be set up (no detector, no face model).
+    /// Throws facetrack::Error when a stage cannot be set up (no detector, no
+    /// face model, a config value out of range).
     explicit Tracker(Models models, const TrackerConfig& config = {});
+    /// With the application's own face detector instead of the configured one
+    /// (config.detector is then unused). The Tracker owns it and calls it from
+    /// process() only. Its kind() picks the landmark model's box prior:
+    /// "yunet" or "cascade"; any other name uses the YuNet prior, so its boxes
+    /// should frame a face as YuNet's do (docs/detector.md).
+    Tracker(Models models, const TrackerConfig& config, std::unique_ptr<FaceDetector> detector);
     ~Tracker();
     Tracker(Tracker&&) noexcept;
     Tracker& operator=(Tracker&&) noexcept;
 
-    /// Processes the next frame of the stream; time_s is its timestamp in
-    /// seconds (used by temporal filtering). Throws Error on an invalid view.
+    /// Processes the next frame of the stream into `out`, whose memory is
+    /// reused: pass the same FrameResult every frame and tracking allocates
+    /// nothing once the number of faces is steady. Returns `out`.
+    ///
+    /// time_s is the frame's capture time in seconds; it must increase from
+    /// frame to frame. The temporal filter steps by the difference; a time
+    /// that does not increase (repeated, backwards, NaN) is taken as 1/30 s
+    /// after the previous frame. Throws Error on an invalid view.
+    FrameResult& process(const ImageView& frame, double time_s, FrameResult& out);
+
+    /// As above, but the caller says where the faces are in this frame (its own
+    /// detector or a face picked by the user): the detector does not run. A box
+    /// that overlaps a followed face confirms it; any other starts a new face
+    /// there (up to max_faces). Followed faces without a box go on being followed.
+    FrameResult& process(const ImageView& frame, double time_s, const std::vector<Box>& faces, FrameResult& out);
+
+    /// Convenience: a new FrameResult per frame (allocates).
     FrameResult process(const ImageView& frame, double time_s);
 
     /// Forgets the calibrated identity of every followed face: they go back to

@@ -11,9 +11,11 @@ namespace facetrack {
 const char* versionString();
 
 /// The directory facetrack loads its shipped models from: the
-/// FACETRACK_MODEL_DIR environment variable when set, else the installed
-/// share/facetrack/models, else the source tree's models/ (for builds that
-/// are not installed).
+/// FACETRACK_MODEL_DIR environment variable when set, else share/facetrack/models
+/// beside the program's bin/ (an installed prefix, also after moving it),
+/// else the install location configured at build time, else a models/ holding
+/// face_model.ftm in or above the program's or the working directory (a
+/// source tree's build). No build-tree path is compiled in.
 std::string modelDirectory();
 
 /// Receives facetrack's log lines (which detector is in use, fallbacks).

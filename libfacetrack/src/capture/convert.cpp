@@ -1,5 +1,6 @@
 #include "capture/convert.hpp"
 
+#include "facetrack/capture.hpp"
 #include "facetrack/error.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -43,3 +44,16 @@ bool decodeMjpeg(const std::uint8_t* data, std::size_t size, int width, int heig
 }
 
 }  // namespace facetrack::capture
+
+namespace facetrack {
+
+std::string toString(CaptureFormat format) {
+    switch (format) {
+        case CaptureFormat::Auto: return "auto";
+        case CaptureFormat::Yuyv: return "yuyv";
+        case CaptureFormat::Mjpeg: return "mjpeg";
+    }
+    return "?";
+}
+
+}  // namespace facetrack

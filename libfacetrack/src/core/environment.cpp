@@ -13,12 +13,56 @@ namespace facetrack {
 
 const char* versionString() { return FACETRACK_VERSION; }
 
+namespace {
+
+/// The running program's directory ("" when unknown).
+fs::path executableDirectory() {
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    return ec ? fs::path() : exe.parent_path();
+}
+
+/// `start` and each directory above it.
+std::vector<fs::path> selfAndAncestors(fs::path start) {
+    std::vector<fs::path> out;
+    std::error_code ec;
+    start = fs::weakly_canonical(start, ec);
+    while (!start.empty()) {
+        out.push_back(start);
+        if (start == start.root_path()) break;
+        start = start.parent_path();
+    }
+    return out;
+}
+
+/// Where a program of facetrack's own source tree or of an installed prefix
+/// finds things without a path compiled in: its own directory, the working
+/// directory, and the directories above them.
+std::vector<fs::path> searchRoots() {
+    std::vector<fs::path> roots;
+    std::error_code ec;
+    for (const fs::path& start : {executableDirectory(), fs::current_path(ec)}) {
+        if (start.empty()) continue;
+        for (const auto& dir : selfAndAncestors(start)) roots.push_back(dir);
+    }
+    return roots;
+}
+
+}  // namespace
+
 std::string modelDirectory() {
     const std::string fromEnv = core::getEnv("FACETRACK_MODEL_DIR");
     if (!fromEnv.empty()) return fromEnv;
     std::error_code ec;
+    // An installed prefix, where it was installed or moved as a whole (bin/ next to share/).
+    const fs::path relocated = executableDirectory() / "../share/facetrack/models";
+    if (fs::is_regular_file(relocated / "face_model.ftm", ec)) return fs::weakly_canonical(relocated, ec).string();
     if (fs::is_directory(FACETRACK_INSTALL_MODEL_DIR, ec)) return FACETRACK_INSTALL_MODEL_DIR;
-    return FACETRACK_SOURCE_DIR "/models";
+    // facetrack's source tree: models/ above the build directory or the working directory.
+    for (const auto& root : searchRoots()) {
+        if (fs::is_regular_file(root / "models/face_model.ftm", ec)) return (root / "models").string();
+    }
+    return FACETRACK_INSTALL_MODEL_DIR;
 }
 
 namespace {
@@ -52,10 +96,13 @@ std::string firstExistingFile(const std::vector<std::string>& candidates) {
 }
 
 std::string sharedDirectory() {
-    for (const std::string& dir : {getEnv("FACETRACK_SHARED_DIR"), std::string("../shared"),
-                                   std::string(FACETRACK_SOURCE_DIR "/../shared")}) {
-        std::error_code ec;
-        if (!dir.empty() && fs::is_directory(dir, ec)) return fs::weakly_canonical(dir, ec).string();
+    std::error_code ec;
+    const std::string fromEnv = getEnv("FACETRACK_SHARED_DIR");
+    if (!fromEnv.empty()) return fs::is_directory(fromEnv, ec) ? fs::weakly_canonical(fromEnv, ec).string() : "";
+    // ../shared beside the source tree, seen from the working directory, the program, or above them.
+    for (const auto& root : searchRoots()) {
+        const fs::path dir = root / "../shared";
+        if (fs::is_directory(dir / "data", ec) || fs::is_directory(dir / "models", ec)) return fs::weakly_canonical(dir, ec).string();
     }
     return "";
 }

@@ -2,6 +2,7 @@
 // 2D landmark shapes (2 x N, pixels): similarity alignment, mean shape, NME.
 
 #include "facetrack/error.hpp"
+#include "facetrack/geometry.hpp"
 
 #include <Eigen/Core>
 
@@ -53,6 +54,9 @@ Similarity alignSimilarity(const Eigen::MatrixBase<From>& from, const Eigen::Mat
 /// Generalised Procrustes mean: each shape aligned by similarity to the
 /// current mean, iterated. The result is centred, with unit RMS radius.
 Shape2 procrustesMean(const std::vector<Shape2>& shapes, int iterations = 5);
+
+/// Outer-eye-corner distance (points 36 and 45): the 300-W face size, in pixels.
+inline float eyeCornerDistance(const Landmarks68& p) { return std::hypot(p[36].x - p[45].x, p[36].y - p[45].y); }
 
 /// 300-W normalised mean error: mean point distance over the outer-eye-corner
 /// distance (0-based points 36 and 45). Both shapes have 68 points.

@@ -1,5 +1,7 @@
 #include "detect/yunet_detector.hpp"
 
+#include "core/box.hpp"
+
 #include "core/image.hpp"
 #include "detect/downscale.hpp"
 #include "facetrack/error.hpp"
@@ -20,14 +22,6 @@ constexpr int kTopK = 5000;
 constexpr float kSureScore = 0.9f;
 constexpr float kSecondLookScale = 0.75f;
 constexpr float kSameFaceIou = 0.5f;
-
-float iou(const Box& a, const Box& b) {
-    const float w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
-    const float h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
-    if (w <= 0.f || h <= 0.f) return 0.f;
-    const float inter = w * h;
-    return inter / (a.width() * a.height() + b.width() * b.height() - inter);
-}
 }  // namespace
 
 YuNetDetector::YuNetDetector(const std::string& modelPath, const DetectorConfig& config)
@@ -70,7 +64,7 @@ std::vector<Detection> YuNetDetector::detect(const ImageView& frame) {
         for (auto d : detections) {
             bool sure = d.score >= kSureScore;
             for (const auto& c : secondLook) {
-                if (iou(d.box, c.box) < kSameFaceIou) continue;
+                if (core::intersectionOverUnion(d.box, c.box) < kSameFaceIou) continue;
                 sure = true;
                 d.score = std::max(d.score, c.score);
             }

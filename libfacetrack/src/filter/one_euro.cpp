@@ -1,5 +1,7 @@
 #include "filter/one_euro.hpp"
 
+#include "core/math.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -8,16 +10,16 @@ namespace facetrack::filter {
 namespace {
 
 double alpha(double cutoffHz, double dt) {
-    const double tau = 1.0 / (2.0 * 3.14159265358979323846 * cutoffHz);
+    const double tau = 1.0 / (2.0 * core::kPi * cutoffHz);
     return 1.0 / (1.0 + tau / dt);
 }
 
 }  // namespace
 
-Eigen::VectorXd OneEuroFilter::operator()(const Eigen::VectorXd& x, double dt, double scale) {
+const Eigen::VectorXd& OneEuroFilter::operator()(const Eigen::VectorXd& x, double dt, double scale) {
     if (value_.size() != x.size() || !value_.allFinite() || !(dt > 0.0)) {
         value_ = x;
-        speed_ = Eigen::VectorXd::Zero(x.size());
+        speed_.setZero(x.size());
         return value_;
     }
     scale = std::max(scale, 1e-9);

@@ -22,8 +22,10 @@ public:
 
     /// Filters the next sample, taken dt seconds after the previous one. Speed
     /// is measured in units of `scale` per second, so one setting serves pixels
-    /// of faces of any size. The first sample (or one of another size) passes through.
-    Eigen::VectorXd operator()(const Eigen::VectorXd& x, double dt, double scale = 1.0);
+    /// of faces of any size. The first sample (or one of another size) passes
+    /// through. Returns the filter's own state (valid until the next call);
+    /// allocates only when the size changes.
+    const Eigen::VectorXd& operator()(const Eigen::VectorXd& x, double dt, double scale = 1.0);
 
     void reset() { value_.resize(0); }
 

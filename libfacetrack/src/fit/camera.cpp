@@ -1,5 +1,7 @@
 #include "fit/camera.hpp"
 
+#include "core/math.hpp"
+
 #include "facetrack/error.hpp"
 
 #include <cmath>
@@ -7,8 +9,11 @@
 
 namespace facetrack::fit {
 
-Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx) {
+Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx, double principalX, double principalY) {
     if (width <= 0 || height <= 0) throw Error("camera: the frame has no pixels");
+    if (!std::isfinite(focalPx) || !std::isfinite(principalX) || !std::isfinite(principalY)) {
+        throw Error("camera: focal length and principal point must be finite numbers");
+    }
     Camera c;
     if (focalPx > 0.0) {
         c.fx = focalPx;
@@ -17,12 +22,13 @@ Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx)
             throw Error("camera: horizontal field of view " + std::to_string(horizontalFovDeg) +
                         " deg is outside (1, 179)");
         }
-        c.fx = 0.5 * width / std::tan(0.5 * horizontalFovDeg * 3.14159265358979323846 / 180.0);
+        c.fx = 0.5 * width / std::tan(0.5 * horizontalFovDeg * core::kRadiansPerDegree);
     }
     c.fy = c.fx;
     // Pixel centres are integers (geometry.hpp), so the image centre is at (w - 1) / 2.
-    c.cx = 0.5 * (width - 1);
-    c.cy = 0.5 * (height - 1);
+    const bool given = principalX >= 0.0 && principalY >= 0.0;
+    c.cx = given ? principalX : 0.5 * (width - 1);
+    c.cy = given ? principalY : 0.5 * (height - 1);
     return c;
 }
 

@@ -16,9 +16,12 @@ struct Camera {
     }
 };
 
-/// Square pixels, principal point at the image centre, and the focal length
-/// `focalPx` when positive, else the one giving `horizontalFovDeg` across the width.
-/// Throws Error on a non-positive size or a field of view outside (1, 179) degrees.
-Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx);
+/// Square pixels; the focal length `focalPx` when positive, else the one giving
+/// `horizontalFovDeg` across the width; the principal point (principalX,
+/// principalY) when both are >= 0, else the image centre. Throws Error on a
+/// non-positive size, a field of view outside (1, 179) degrees, or a
+/// non-finite value.
+Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx, double principalX = -1.0,
+                 double principalY = -1.0);
 
 }  // namespace facetrack::fit

@@ -53,20 +53,25 @@ bool LandmarksCost::Evaluate(double const* const* parameters, double* residuals,
         const double invZ = 1.0 / y.z();
         const Eigen::Vector2d e((cam.fx * y.x() * invZ + cam.cx - in_.observed[2 * i]) * invScale,
                                 (cam.fy * y.y() * invZ + cam.cy - in_.observed[2 * i + 1]) * invScale);
-        // Huber: rho(s) = s for s <= delta^2, else 2 delta sqrt(s) - delta^2.
+        // Huber: rho(s) = s for s <= delta^2, else 2 delta sqrt(s) - delta^2;
+        // r = c e with c = sqrt(rho(s) / s), so that |r|^2 = rho(s).
         const double s = e.squaredNorm();
         const bool inlier = s <= delta2;
-        const double costScale = inlier ? 1.0 : std::sqrt((2.0 * in_.huber * std::sqrt(s) - delta2) / s);
-        const double jacobianScale = inlier ? 1.0 : std::sqrt(in_.huber / std::sqrt(s));
-        residuals[2 * i] = costScale * e.x();
-        residuals[2 * i + 1] = costScale * e.y();
+        const double c = inlier ? 1.0 : std::sqrt((2.0 * in_.huber * std::sqrt(s) - delta2) / s);
+        residuals[2 * i] = c * e.x();
+        residuals[2 * i + 1] = c * e.y();
         if (!jacobians) continue;
 
-        // d e / d y: the perspective projection's Jacobian, scaled.
+        // dr/dy = (c I + 2 c'(s) e e^T) de/dy, c'(s) = (delta^2 / s^2 - delta / s^(3/2)) / (2 c),
+        // with de/dy the perspective projection's Jacobian over the face size.
         Eigen::Matrix<double, 2, 3> dProj;
         dProj << cam.fx * invZ, 0.0, -cam.fx * y.x() * invZ * invZ,  //
             0.0, cam.fy * invZ, -cam.fy * y.y() * invZ * invZ;
-        dProj *= invScale * jacobianScale;
+        dProj *= invScale;
+        if (!inlier) {
+            const double dc = (delta2 / (s * s) - in_.huber / (s * std::sqrt(s))) / (2.0 * c);
+            dProj = (c * Eigen::Matrix2d::Identity() + 2.0 * dc * e * e.transpose()) * dProj;
+        }
         if (jacobians[0]) {
             Eigen::Map<Eigen::Matrix<double, 2 * kCount, 6, Eigen::RowMajor>> j(jacobians[0]);
             for (int d = 0; d < 3; ++d) j.block<2, 1>(2 * i, d) = dProj * (dRotation[d] * x);

@@ -39,50 +39,40 @@ Eigen::Matrix<double, 6, 1> poseTemporalWeights(const FitSettings& s) {
     return w;
 }
 
-Eigen::Vector3d transformed(const FaceParams& params, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& x) {
-    return rotation * x + params.translation();
-}
-
 }  // namespace
 
 double eyeCornerDistance(const Landmarks2d& points) { return (points.col(36) - points.col(45)).norm(); }
 
-Eigen::Matrix3Xd slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression) {
-    Eigen::Matrix3Xd x = base;
+void slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x) {
+    x = base;
     if (expression.size() == basis.expressionCount() && expression.size() > 0) {
-        const Eigen::VectorXd offsets = basis.expression * expression;
-        x += Eigen::Map<const Eigen::Matrix3Xd>(offsets.data(), 3, basis.slotCount());
+        Eigen::Map<Eigen::VectorXd>(x.data(), x.size()).noalias() += basis.expression * expression;
     }
-    return x;
 }
 
-Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                             const FaceParams& params, const ContourSlots& contour) {
-    const Eigen::Matrix3Xd x = slotPositions(basis, base, params.expression);
-    const Eigen::Matrix3d rotation = rotationOf(params.omega());
+Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+                         const ContourSlots& contour) {
+    const Eigen::Matrix3d rotation = rotationOf(pose.head<3>());
     Landmarks2d out;
     for (int i = 0; i < model::kLandmarkCount; ++i) {
         const int slot = i < kJaw ? contour[i] : basis.landmark_slots[i];
-        out.col(i) = camera.project<double>(transformed(params, rotation, x.col(slot)));
+        out.col(i) = camera.project<double>(rotation * x.col(slot) + pose.tail<3>());
     }
     return out;
 }
 
-ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                               const FaceParams& params) {
-    const Eigen::Matrix3Xd x = slotPositions(basis, base, params.expression);
-    const Eigen::Matrix3d rotation = rotationOf(params.omega());
-    auto projected = [&](int slot) { return camera.project<double>(transformed(params, rotation, x.col(slot))); };
+ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose) {
+    const Eigen::Matrix3d rotation = rotationOf(pose.head<3>());
+    auto projected = [&](const Eigen::Vector3d& p) { return camera.project<double>(rotation * p + pose.tail<3>()); };
     ContourSlots chosen{};
     for (int i = 0; i < kJaw; ++i) {
         const Eigen::Vector3d own = x.col(basis.landmark_slots[i]);
-        const Eigen::Vector2d origin = projected(basis.landmark_slots[i]);
-        const Eigen::Vector2d outward =
-            (camera.project<double>(transformed(params, rotation, own + basis.contour_outward[i])) - origin).normalized();
+        const Eigen::Vector2d origin = projected(own);
+        const Eigen::Vector2d outward = (projected(own + basis.contour_outward[i]) - origin).normalized();
         chosen[i] = basis.landmark_slots[i];
         double best = -std::numeric_limits<double>::infinity();
         for (const int slot : basis.contour_slots[i]) {
-            const double reach = (projected(slot) - origin).dot(outward);
+            const double reach = (projected(x.col(slot)) - origin).dot(outward);
             if (reach > best) {
                 best = reach;
                 chosen[i] = slot;
@@ -92,16 +82,15 @@ ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& ba
     return chosen;
 }
 
-ContourSlots nearestContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                            const FaceParams& params, const Landmarks2d& observed) {
-    const Eigen::Matrix3Xd x = slotPositions(basis, base, params.expression);
-    const Eigen::Matrix3d rotation = rotationOf(params.omega());
+ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+                              const Landmarks2d& observed) {
+    const Eigen::Matrix3d rotation = rotationOf(pose.head<3>());
     ContourSlots chosen{};
     for (int i = 0; i < kJaw; ++i) {
         chosen[i] = basis.landmark_slots[i];
         double best = std::numeric_limits<double>::infinity();
         for (const int slot : basis.contour_slots[i]) {
-            const double d = (camera.project<double>(transformed(params, rotation, x.col(slot))) - observed.col(i)).squaredNorm();
+            const double d = (camera.project<double>(rotation * x.col(slot) + pose.tail<3>()) - observed.col(i)).squaredNorm();
             if (d < best) {
                 best = d;
                 chosen[i] = slot;
@@ -111,20 +100,36 @@ ContourSlots nearestContour(const FitBasis& basis, const Eigen::Matrix3Xd& base,
     return chosen;
 }
 
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                             const FaceParams& params, const ContourSlots& contour) {
+    Eigen::Matrix3Xd x;
+    slotPositions(basis, base, params.expression, x);
+    return projectSlots(basis, x, camera, params.pose, contour);
+}
+
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                               const FaceParams& params) {
+    Eigen::Matrix3Xd x;
+    slotPositions(basis, base, params.expression, x);
+    return silhouetteContourAt(basis, x, camera, params.pose);
+}
+
 FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings& settings)
     : basis_(std::move(basis)), settings_(settings) {
     if (!basis_) throw Error("FaceFitter: no fit basis");
     const int expressions = basis_->expressionCount();
     base_ = basis_->neutral;
-    pose_.setZero();
+    slots_ = base_;
     previous_pose_.setZero();
-    expression_ = previous_expression_ = Eigen::VectorXd::Zero(expressions);
+    current_.expression = previous_expression_ = expression_before_step_ = Eigen::VectorXd::Zero(expressions);
+    double* pose = current_.pose.data();
+    double* expression = current_.expression.data();
     problem_ = std::make_unique<ceres::Problem>();
     landmarks_ = new LandmarksCost({basis_.get(), &base_, &camera_, observed_.data(), &scale_, settings_.huber}, false);
-    problem_->AddResidualBlock(landmarks_, nullptr, pose_.data(), expression_.data());
+    problem_->AddResidualBlock(landmarks_, nullptr, pose, expression);
     // Cold fits only: no previous frame, so no temporal prior here.
-    problem_->AddResidualBlock(new ShrinkToZero(expressions, settings_.expression_l2), nullptr, expression_.data());
-    boundExpressions(*problem_, expression_.data(), expressions);
+    problem_->AddResidualBlock(new ShrinkToZero(expressions, settings_.expression_l2), nullptr, expression);
+    boundExpressions(*problem_, expression, expressions);
 
     residuals_.resize(2 * model::kLandmarkCount);
     jacobian_pose_.resize(2 * model::kLandmarkCount, 6);
@@ -136,7 +141,7 @@ FaceFitter::~FaceFitter() = default;
 
 double FaceFitter::objective(Eigen::MatrixXd* jacobian) {
     const int e = basis_->expressionCount();
-    const double* parameters[] = {pose_.data(), expression_.data()};
+    const double* parameters[] = {current_.pose.data(), current_.expression.data()};
     double* blocks[] = {jacobian_pose_.data(), jacobian_expression_.data()};
     if (!landmarks_->Evaluate(parameters, residuals_.data(), jacobian ? blocks : nullptr)) {
         return std::numeric_limits<double>::infinity();
@@ -144,9 +149,10 @@ double FaceFitter::objective(Eigen::MatrixXd* jacobian) {
     double cost = residuals_.squaredNorm();
     // The priors are diagonal quadratics, added here directly.
     const double wT = settings_.expression_temporal;
-    cost += settings_.expression_l2 * expression_.squaredNorm() + wT * (expression_ - previous_expression_).squaredNorm();
+    const Eigen::VectorXd& b = current_.expression;
+    cost += settings_.expression_l2 * b.squaredNorm() + wT * (b - previous_expression_).squaredNorm();
     const Eigen::Matrix<double, 6, 1> wP = poseTemporalWeights(settings_);
-    cost += (wP.array() * (pose_ - previous_pose_).array().square()).sum();
+    cost += (wP.array() * (current_.pose - previous_pose_).array().square()).sum();
     if (jacobian) {
         jacobian->leftCols<6>() = jacobian_pose_;
         jacobian->rightCols(e) = jacobian_expression_;
@@ -167,19 +173,19 @@ int FaceFitter::solveWarm(int iterations) {
         normal_.noalias() = jacobian_.transpose() * jacobian_;
         gradient_.noalias() = jacobian_.transpose() * residuals_;
         normal_.diagonal().head<6>() += wP;
-        gradient_.head<6>() += wP.cwiseProduct(pose_ - previous_pose_);
+        gradient_.head<6>() += wP.cwiseProduct(current_.pose - previous_pose_);
         normal_.diagonal().tail(e).array() += settings_.expression_l2 + wT;
-        gradient_.tail(e) += settings_.expression_l2 * expression_ + wT * (expression_ - previous_expression_);
+        gradient_.tail(e) += settings_.expression_l2 * current_.expression + wT * (current_.expression - previous_expression_);
 
-        const Eigen::Matrix<double, 6, 1> pose = pose_;
-        const Eigen::VectorXd expression = expression_;
+        const Pose6 pose = current_.pose;
+        expression_before_step_ = current_.expression;
         bool accepted = false;
         for (int attempt = 0; attempt < 6 && !accepted; ++attempt) {
             damped_ = normal_;
             damped_.diagonal() *= 1.0 + lambda;
             step_ = ldlt_.compute(damped_).solve(-gradient_);
-            pose_ = pose + step_.head<6>();
-            expression_ = (expression + step_.tail(e)).cwiseMax(0.0).cwiseMin(1.0);  // projected onto the bounds
+            current_.pose = pose + step_.head<6>();
+            current_.expression = (expression_before_step_ + step_.tail(e)).cwiseMax(0.0).cwiseMin(1.0);  // projected onto the bounds
             const double next = objective(nullptr);
             if (next < cost) {
                 accepted = true;
@@ -193,8 +199,8 @@ int FaceFitter::solveWarm(int iterations) {
             }
         }
         if (!accepted) {
-            pose_ = pose;
-            expression_ = expression;
+            current_.pose = pose;
+            current_.expression = expression_before_step_;
             break;
         }
     }
@@ -241,6 +247,13 @@ int FaceFitter::solve(int iterations) {
     return static_cast<int>(summary.iterations.size());
 }
 
+void FaceFitter::chooseContour(bool nearest, FitReport& report) {
+    slotPositions(*basis_, base_, current_.expression, slots_);
+    report.contour = nearest ? nearestContourAt(*basis_, slots_, camera_, current_.pose, observed_)
+                             : silhouetteContourAt(*basis_, slots_, camera_, current_.pose);
+    for (int i = 0; i < kJaw; ++i) landmarks_->setSlot(i, report.contour[i]);
+}
+
 FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm) {
     FitReport report;
     report.residual = std::numeric_limits<double>::infinity();
@@ -252,37 +265,31 @@ FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, Fac
         params = initialParams(observed);
         warm = false;
     }
-    pose_ = previous_pose_ = params.pose;
-    expression_ = previous_expression_ = params.expression;
+    current_.pose = previous_pose_ = params.pose;
+    current_.expression = previous_expression_ = params.expression;
 
-    auto current = [&] { return FaceParams{pose_, expression_}; };
     // Cold rounds start from the silhouette, which holds the pose steady while
     // it is far off; the last round (and every warm fit) takes the candidates
     // nearest the observed jaw points.
-    auto chooseContour = [&](bool nearest) {
-        report.contour = nearest ? nearestContour(*basis_, base_, camera_, current(), observed_)
-                                 : silhouetteContour(*basis_, base_, camera_, current());
-        for (int i = 0; i < kJaw; ++i) landmarks_->setSlot(i, report.contour[i]);
-    };
-    if (!warm) {
-        // Pose alone first: from the frontal start, expressions would absorb the rotation.
-        chooseContour(false);
-        problem_->SetParameterBlockConstant(expression_.data());
-        report.iterations += solve(settings_.cold_iterations);
-        problem_->SetParameterBlockVariable(expression_.data());
-    }
     if (warm) {
-        chooseContour(true);
+        chooseContour(true, report);
         report.iterations += solveWarm(settings_.warm_iterations);
     } else {
+        // Pose alone first: from the frontal start, expressions would absorb the rotation.
+        chooseContour(false, report);
+        problem_->SetParameterBlockConstant(current_.expression.data());
+        report.iterations += solve(settings_.cold_iterations);
+        problem_->SetParameterBlockVariable(current_.expression.data());
         for (int round = 0; round < 2; ++round) {
-            chooseContour(round == 1);
+            chooseContour(round == 1, report);
             report.iterations += solve(settings_.cold_iterations);
         }
     }
-    params = current();
-    const Landmarks2d fitted = projectLandmarks(*basis_, base_, camera_, params, report.contour);
-    report.residual = std::sqrt((fitted - observed).colwise().squaredNorm().mean()) / scale_;
+    params.pose = current_.pose;
+    params.expression = current_.expression;
+    slotPositions(*basis_, base_, params.expression, slots_);
+    report.projected = projectSlots(*basis_, slots_, camera_, params.pose, report.contour);
+    report.residual = std::sqrt((report.projected - observed).colwise().squaredNorm().mean()) / scale_;
     if (!params.pose.allFinite() || !params.expression.allFinite()) {
         report.residual = std::numeric_limits<double>::infinity();
     }

@@ -41,34 +41,44 @@ struct FitSettings {
 struct FitReport {
     double residual = 0.0;  ///< RMS landmark distance after the fit, in eye-corner distances
     ContourSlots contour{};
+    Landmarks2d projected = Landmarks2d::Zero();  ///< the fitted face's landmarks (pixels)
     int iterations = 0;
 };
 
 /// Outer-eye-corner distance (points 36 and 45), the 300-W face size.
 double eyeCornerDistance(const Landmarks2d& points);
 
-/// X_s = base_s + D_s b for every slot (3 x S, frontal frame, cm).
-Eigen::Matrix3Xd slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression);
+using Pose6 = Eigen::Matrix<double, 6, 1>;  ///< (omega, t) as in FaceParams
 
-/// The 68 landmarks the fitted face projects to, jaw points at `contour`.
-Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                             const FaceParams& params, const ContourSlots& contour);
+/// X_s = base_s + D_s b for every slot (3 x S, frontal frame, cm), into `x`
+/// (no allocation once `x` has the size).
+void slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x);
+
+/// The 68 landmarks slot positions `x` project to under `pose`, jaw points at `contour`.
+Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+                         const ContourSlots& contour);
 
 /// For each jaw landmark, the candidate on the silhouette: the one whose
 /// projection reaches furthest along the image direction of the landmark's
 /// outward axis (FitBasis::contour_outward). A path swept across the jaw
 /// reaches that extreme where it turns out of view. This is how a rendered
 /// face's jaw landmarks fall (the synthetic tests use it).
-ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                               const FaceParams& params);
+ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose);
 
 /// For each jaw landmark, the candidate whose projection is nearest the
 /// observed point: the correspondence the fit uses. On real faces the
 /// candidate paths (snapped to mesh vertices) wander off the outline in
 /// places, and the observed point, not the pure geometry, says where on the
 /// outline the annotator's jaw point lies.
-ContourSlots nearestContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
-                            const FaceParams& params, const Landmarks2d& observed);
+ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+                              const Landmarks2d& observed);
+
+/// The same three for a base shape and fitted parameters (they compute the slot
+/// positions, allocating: for tests and tools, not per frame).
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                             const FaceParams& params, const ContourSlots& contour);
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+                               const FaceParams& params);
 
 /// Fits one face frame by frame. Holds a Ceres problem (for cold fits) built
 /// once and re-solved, and the warm fit's buffers, sized once. Not copyable:
@@ -101,17 +111,22 @@ private:
     int solveWarm(int iterations);
     double objective(Eigen::MatrixXd* jacobian);  // the warm objective at pose_, expression_
 
+    void chooseContour(bool nearest, FitReport& report);
+
     std::shared_ptr<const FitBasis> basis_;
     FitSettings settings_;
     Eigen::VectorXd identity_;
     Eigen::Matrix3Xd base_;
 
-    // What the costs read through pointers.
+    // What the costs read through pointers. current_'s pose and expression are
+    // the Ceres parameter blocks: sized once, never reallocated.
     Camera camera_;
     Landmarks2d observed_ = Landmarks2d::Zero();
     double scale_ = 1.0;
-    Eigen::Matrix<double, 6, 1> pose_, previous_pose_;
-    Eigen::VectorXd expression_, previous_expression_;
+    FaceParams current_;
+    Pose6 previous_pose_;
+    Eigen::VectorXd previous_expression_;
+    Eigen::Matrix3Xd slots_;  // slot positions at current_.expression
 
     std::unique_ptr<ceres::Problem> problem_;
     LandmarksCost* landmarks_ = nullptr;
@@ -121,7 +136,7 @@ private:
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jacobian_pose_, jacobian_expression_;
     Eigen::MatrixXd jacobian_, normal_, damped_;
     Eigen::LDLT<Eigen::MatrixXd> ldlt_;
-    Eigen::VectorXd gradient_, step_;
+    Eigen::VectorXd gradient_, step_, expression_before_step_;
 };
 
 /// One frame of the identity calibration window.

@@ -1,5 +1,7 @@
 #include "fit/pose.hpp"
 
+#include "core/math.hpp"
+
 #include "fit/fit_basis.hpp"
 
 #include <algorithm>
@@ -13,7 +15,7 @@ namespace facetrack::fit {
 // roll > 0 a clockwise tilt in the image (y points down).
 
 namespace {
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kDeg = core::kRadiansPerDegree;
 }
 
 Eigen::Matrix3d rotationOf(const Eigen::Vector3d& omega) {
@@ -50,6 +52,18 @@ HeadPose headPoseOf(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& t
     pose.euler_deg = {static_cast<float>(euler.x()), static_cast<float>(euler.y()), static_cast<float>(euler.z())};
     pose.translation_mm = {static_cast<float>(translationMm.x()), static_cast<float>(translationMm.y()),
                            static_cast<float>(translationMm.z())};
+    // [R t; 0 1], column-major; OpenGL's eye frame negates the camera's y and z rows.
+    const Eigen::Matrix3d r = q.toRotationMatrix();
+    for (int row = 0; row < 3; ++row) {
+        const float flip = row == 0 ? 1.f : -1.f;
+        for (int col = 0; col < 3; ++col) {
+            pose.camera_from_model[4 * col + row] = static_cast<float>(r(row, col));
+            pose.gl_model_view[4 * col + row] = flip * static_cast<float>(r(row, col));
+        }
+        pose.camera_from_model[12 + row] = static_cast<float>(translationMm[row]);
+        pose.gl_model_view[12 + row] = flip * static_cast<float>(translationMm[row]);
+    }
+    pose.camera_from_model[15] = pose.gl_model_view[15] = 1.f;
     return pose;
 }
 

@@ -16,9 +16,8 @@ std::shared_ptr<const LandmarkModel> LandmarkModel::load(const std::string& path
     return std::make_shared<const LandmarkModel>(std::move(data), path);
 }
 
-std::shared_ptr<const LandmarkModel> LandmarkModel::loadDefault() {
-    return load(modelDirectory() + "/landmarks_lbf.ftm");
-}
+std::shared_ptr<const LandmarkModel> LandmarkModel::loadDefault() { return load(defaultPath()); }
+std::string LandmarkModel::defaultPath() { return modelDirectory() + "/landmarks_lbf.ftm"; }
 
 std::uint32_t LandmarkModel::formatVersion() { return landmarks::kLbfVersion; }
 int LandmarkModel::stageCount() const { return static_cast<int>(data_->stages.size()); }

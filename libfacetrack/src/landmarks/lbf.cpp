@@ -6,6 +6,19 @@
 
 namespace facetrack::landmarks {
 
+namespace {
+
+/// A hint to bring memory into the cache; nothing where the compiler has no builtin for it.
+inline void prefetch(const void* address) {
+#if defined(__GNUC__) || defined(__clang__)
+    __builtin_prefetch(address);
+#else
+    (void)address;
+#endif
+}
+
+}  // namespace
+
 Anchors anchorsOf(const LbfModel& model, const Shape68& shape) {
     Anchors anchors(2, model.anchorCount());
     anchors.leftCols<kLandmarks>() = shape;
@@ -27,12 +40,12 @@ void applyStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gra
     traverseStage(model, stage, gray, anchors, [&](int, int row) { rows[count++] = row; });
     constexpr int kAhead = 4;
     constexpr int kRowBytes = 2 * kLandmarks;  // int8 values
-    for (int k = 0; k < std::min(count, kAhead); ++k) __builtin_prefetch(stage.regression.row(rows[k]).data());
+    for (int k = 0; k < std::min(count, kAhead); ++k) prefetch(stage.regression.row(rows[k]).data());
     std::array<float, 2 * kLandmarks> increment{};
     for (int k = 0; k < count; ++k) {
         if (k + kAhead < count) {
             const auto* next = reinterpret_cast<const char*>(stage.regression.row(rows[k + kAhead]).data());
-            for (int line = 0; line < kRowBytes; line += 64) __builtin_prefetch(next + line);
+            for (int line = 0; line < kRowBytes; line += 64) prefetch(next + line);
         }
         const std::int8_t* q = stage.regression.row(rows[k]).data();
         const float scale = stage.row_scale[static_cast<std::size_t>(rows[k])];
@@ -52,6 +65,12 @@ Landmarks68 toLandmarks68(const Shape68& shape) {
     Landmarks68 out;
     for (int i = 0; i < kLandmarks; ++i) out[i] = {shape(0, i), shape(1, i)};
     return out;
+}
+
+Shape68 fromLandmarks68(const Landmarks68& points) {
+    Shape68 shape;
+    for (int i = 0; i < kLandmarks; ++i) shape.col(i) << points[i].x, points[i].y;
+    return shape;
 }
 
 Shape68 shapeFromBox(const LbfModel& model, const Box& box, const std::string& detector) {

@@ -55,8 +55,9 @@ void applyStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gra
 /// The full cascade from an initial shape. `gray` is 8-bit, one channel.
 Shape68 alignLandmarks(const LbfModel& model, const cv::Mat& gray, Shape68 shape);
 
-/// The shape as the public API's landmark array.
+/// The shape as the public API's landmark array, and back.
 Landmarks68 toLandmarks68(const Shape68& shape);
+Shape68 fromLandmarks68(const Landmarks68& points);
 
 /// The initial shape for a detector box: the model's box prior for that
 /// detector kind ("yunet", "cascade"), else its first prior.

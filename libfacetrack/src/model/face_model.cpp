@@ -2,6 +2,7 @@
 
 #include "facetrack/error.hpp"
 #include "facetrack/version.hpp"
+#include "fit/fit_basis.hpp"
 #include "model/arkit_mapping.hpp"
 #include "model/face_model_data.hpp"
 
@@ -12,6 +13,7 @@ FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::stri
     if (!data_) throw Error("FaceModel: null model data");
     for (const auto& e : data_->expressions) expression_names_.push_back(e.name);
     arkit_ = std::make_shared<const model::ArkitMapping>(model::makeArkitMapping(expression_names_));
+    fit_basis_ = std::make_shared<const fit::FitBasis>(fit::buildFitBasis(*data_));
 }
 
 std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path) {
@@ -19,7 +21,8 @@ std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path) {
     return std::make_shared<const FaceModel>(std::move(data), path);
 }
 
-std::shared_ptr<const FaceModel> FaceModel::loadDefault() { return load(modelDirectory() + "/face_model.ftm"); }
+std::shared_ptr<const FaceModel> FaceModel::loadDefault() { return load(defaultPath()); }
+std::string FaceModel::defaultPath() { return modelDirectory() + "/face_model.ftm"; }
 
 std::uint32_t FaceModel::formatVersion() { return model::kFaceModelVersion; }
 
@@ -43,6 +46,12 @@ std::vector<int> FaceModel::landmarkVertices() const {
 }
 
 std::vector<Vec3> FaceModel::vertices(const std::vector<float>& identity, const std::vector<float>& expression) const {
+    std::vector<Vec3> out;
+    vertices(identity, expression, out);
+    return out;
+}
+
+void FaceModel::vertices(const std::vector<float>& identity, const std::vector<float>& expression, std::vector<Vec3>& out) const {
     const auto& d = *data_;
     if (!identity.empty() && static_cast<int>(identity.size()) != d.identityCount()) {
         throw Error("FaceModel::vertices: " + std::to_string(identity.size()) + " identity coefficients given, the model has " +
@@ -52,19 +61,29 @@ std::vector<Vec3> FaceModel::vertices(const std::vector<float>& identity, const 
         throw Error("FaceModel::vertices: " + std::to_string(expression.size()) + " expression weights given, the model has " +
                     std::to_string(d.expressions.size()));
     }
-    Eigen::Matrix3Xf v = d.neutral;
+    const int n = d.vertexCount();
+    out.resize(static_cast<std::size_t>(n));
+    if (n == 0) return;
+    // Straight into `out` (three floats a vertex), in cm until the last step:
+    // V = neutral + B_id a, then the sparse expression deltas.
+    static_assert(sizeof(Vec3) == 3 * sizeof(float), "Vec3 must be three packed floats");
+    Eigen::Map<Eigen::VectorXf> flat(&out.front().x, 3 * static_cast<Eigen::Index>(n));
+    flat = Eigen::Map<const Eigen::VectorXf>(d.neutral.data(), 3 * static_cast<Eigen::Index>(n));
     if (!identity.empty()) {
-        const Eigen::VectorXf offsets = d.identity_basis * Eigen::Map<const Eigen::VectorXf>(identity.data(), identity.size());
-        v += Eigen::Map<const Eigen::Matrix3Xf>(offsets.data(), 3, v.cols());
+        flat.noalias() += d.identity_basis * Eigen::Map<const Eigen::VectorXf>(identity.data(), static_cast<Eigen::Index>(identity.size()));
     }
     for (std::size_t e = 0; e < expression.size(); ++e) {
-        if (expression[e] == 0.f) continue;
+        const float w = expression[e];
+        if (w == 0.f) continue;
         const auto& shape = d.expressions[e];
-        for (std::size_t k = 0; k < shape.vertices.size(); ++k) v.col(shape.vertices[k]) += expression[e] * shape.deltas.col(k);
+        for (std::size_t k = 0; k < shape.vertices.size(); ++k) {
+            Vec3& v = out[shape.vertices[k]];
+            v.x += w * shape.deltas(0, k);
+            v.y += w * shape.deltas(1, k);
+            v.z += w * shape.deltas(2, k);
+        }
     }
-    std::vector<Vec3> out(v.cols());
-    for (Eigen::Index i = 0; i < v.cols(); ++i) out[i] = {10.f * v(0, i), 10.f * v(1, i), 10.f * v(2, i)};  // cm -> mm
-    return out;
+    flat *= 10.f;  // cm -> mm
 }
 
 std::vector<std::array<int, 3>> FaceModel::triangles() const {

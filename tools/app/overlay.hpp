@@ -3,27 +3,31 @@
 // region, front-facing triangles), the 68 landmarks, the head's axes and,
 // when the gaze stage gives them, the gaze rays.
 
-#include "common/posed_mesh.hpp"
 #include "facetrack/face_model.hpp"
+#include "facetrack/posed_mesh.hpp"
 #include "facetrack/result.hpp"
 
 #include <opencv2/core.hpp>
 
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace facetrack::tools {
 
 class OverlayRenderer {
 public:
-    explicit OverlayRenderer(const FaceModel& model);
-    void draw(cv::Mat& bgr, const FrameResult& result) const;
+    explicit OverlayRenderer(std::shared_ptr<const FaceModel> model);
+    /// Not thread-safe: reuses its mesh buffers from call to call.
+    void draw(cv::Mat& bgr, const FrameResult& result);
 
 private:
-    const FaceModel& model_;
+    MeshPoser poser_;
     std::vector<std::array<int, 3>> face_triangles_;  // skin region only: the rest (eyes, mouth socket, head) clutters
-    int axes_origin_ = 0;
-    std::array<EyeRig, 2> eyes_;                             // vertex the pose axes start from (nose bridge)
+    int axes_origin_ = 0;                              // vertex the pose axes start from (nose bridge)
+    std::vector<Vec3> mesh_;                           // model frame, reused
+    std::vector<cv::Point3f> camera_;                  // camera frame, reused
+    cv::Mat layer_;
 };
 
 }  // namespace facetrack::tools

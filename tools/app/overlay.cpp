@@ -12,8 +12,8 @@ struct Projector {
     HeadPose pose;
     /// Camera-frame position (mm) of a model-frame point (mm).
     cv::Point3f toCamera(const Vec3& v) const {
-        const Vec3 r = rotate(pose.rotation, v);
-        return {r.x + pose.translation_mm.x, r.y + pose.translation_mm.y, r.z + pose.translation_mm.z};
+        const Vec3 c = facetrack::toCamera(pose, v);
+        return {c.x, c.y, c.z};
     }
     cv::Point2f project(const cv::Point3f& p) const {
         return {camera.fx * p.x / p.z + camera.cx, camera.fy * p.y / p.z + camera.cy};
@@ -25,23 +25,27 @@ cv::Point fixedPoint(const cv::Point2f& p) { return {cvRound(p.x * (1 << kShift)
 
 }  // namespace
 
-OverlayRenderer::OverlayRenderer(const FaceModel& model) : model_(model), eyes_(EyeRig::both(model)) {
-    const int face = model.faceVertexCount();
-    for (const auto& t : model.triangles()) {
+OverlayRenderer::OverlayRenderer(std::shared_ptr<const FaceModel> model) : poser_(std::move(model)) {
+    const FaceModel& m = poser_.model();
+    const int face = m.faceVertexCount();
+    for (const auto& t : m.triangles()) {
         if (t[0] < face && t[1] < face && t[2] < face) face_triangles_.push_back(t);
     }
-    axes_origin_ = model.landmarkVertices()[27];
+    axes_origin_ = m.landmarkVertices()[27];
 }
 
-void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
+void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) {
     for (const auto& face : result.faces) {
         if (face.pose && face.expression) {
             const Projector projector{result.camera, *face.pose};
-            const auto vertices = model_.vertices(face.identity, face.expression->native);
-            std::vector<cv::Point3f> cam(vertices.size());
+            poser_.modelFrame(face, mesh_);
+            const std::vector<Vec3>& vertices = mesh_;
+            std::vector<cv::Point3f>& cam = camera_;
+            cam.resize(vertices.size());
             for (std::size_t i = 0; i < vertices.size(); ++i) cam[i] = projector.toCamera(vertices[i]);
             // Drawn on a copy and blended at 35 %: the face stays visible under the wires.
-            cv::Mat layer = bgr.clone();
+            bgr.copyTo(layer_);
+            cv::Mat& layer = layer_;
             const cv::Scalar mesh(170, 200, 120);
             for (const auto& t : face_triangles_) {
                 const cv::Point3f &a = cam[t[0]], &b = cam[t[1]], &c = cam[t[2]];
@@ -66,8 +70,9 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) const {
             if (face.gaze) {
                 // Gaze rays, 60 mm from each eyeball's centre (camera frame directions).
                 const std::array<const EyeGaze*, 2> gaze = {&face.gaze->left, &face.gaze->right};
+                const std::array<Vec3, 2> centres = poser_.eyeCentres(vertices);
                 for (int e = 0; e < 2; ++e) {
-                    const cv::Point3f from = projector.toCamera(eyes_[e].centre(vertices));
+                    const cv::Point3f from = projector.toCamera(centres[e]);
                     const Vec3& d = gaze[e]->direction;
                     const cv::Point3f to = from + 60.f * cv::Point3f(d.x, d.y, d.z);
                     if (from.z <= 0 || to.z <= 0) continue;

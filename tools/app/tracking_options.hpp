@@ -2,7 +2,7 @@
 // The detector's and the tracker's command-line options, shared by every tool
 // that tracks (the CLI's track, bench and eval-track, and the demo).
 
-#include "common/args.hpp"
+#include "app/args.hpp"
 
 #include "facetrack/detector.hpp"
 #include "facetrack/tracker.hpp"

@@ -1,4 +1,4 @@
-#include "common/tracking_options.hpp"
+#include "app/tracking_options.hpp"
 
 namespace facetrack::tools {
 

@@ -1,8 +1,10 @@
-#include "common/posed_mesh.hpp"
+#include "facetrack/posed_mesh.hpp"
+
+#include "facetrack/error.hpp"
 
 #include <cmath>
 
-namespace facetrack::tools {
+namespace facetrack {
 
 namespace {
 
@@ -28,6 +30,8 @@ Vec3 rotate(const Quaternion& q, const Vec3& v) {
 }
 
 Vec3 rotateBack(const Quaternion& q, const Vec3& v) { return rotate({q.w, -q.x, -q.y, -q.z}, v); }
+
+Vec3 toCamera(const HeadPose& pose, const Vec3& modelPoint) { return rotate(pose.rotation, modelPoint) + pose.translation_mm; }
 
 EyeRig::EyeRig(const FaceModel& model, const EyeballGeometry& eye) : eye_(eye) {
     rest_mean_ = vertexMean(model.vertices({}, {}), eye.first_vertex, eye.last_vertex);
@@ -56,4 +60,27 @@ void EyeRig::turn(std::vector<Vec3>& mesh, const Vec3& direction) const {
     for (int i = eye_.first_vertex; i <= eye_.last_vertex; ++i) mesh[i] = pivot + rotate(q, mesh[i] - pivot);
 }
 
-}  // namespace facetrack::tools
+MeshPoser::MeshPoser(std::shared_ptr<const FaceModel> model)
+    : model_(model ? std::move(model) : throw Error("MeshPoser: no face model")), eyes_(EyeRig::both(*model_)) {}
+
+void MeshPoser::modelFrame(const FaceResult& face, std::vector<Vec3>& out) const {
+    static const std::vector<float> neutral;
+    model_->vertices(face.identity, face.expression ? face.expression->native : neutral, out);
+    if (face.gaze && face.pose) {
+        // Gaze is in the camera frame; the mesh is in the model frame.
+        eyes_[0].turn(out, rotateBack(face.pose->rotation, face.gaze->left.direction));
+        eyes_[1].turn(out, rotateBack(face.pose->rotation, face.gaze->right.direction));
+    }
+}
+
+void MeshPoser::cameraFrame(const FaceResult& face, std::vector<Vec3>& out) const {
+    if (!face.pose) throw Error("MeshPoser::cameraFrame: the face has no pose");
+    modelFrame(face, out);
+    for (Vec3& v : out) v = toCamera(*face.pose, v);
+}
+
+std::array<Vec3, 2> MeshPoser::eyeCentres(const std::vector<Vec3>& modelMesh) const {
+    return {eyes_[0].centre(modelMesh), eyes_[1].centre(modelMesh)};
+}
+
+}  // namespace facetrack

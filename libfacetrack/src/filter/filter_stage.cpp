@@ -1,0 +1,92 @@
+#include "filter/filter_stage.hpp"
+
+#include "core/shape2d.hpp"
+#include "filter/one_euro.hpp"
+#include "fit/pose.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace facetrack::filter {
+
+namespace {
+
+constexpr double kTranslationScaleMm = 90.0;  // ~ an eye-corner distance: the unit of translation speed
+
+struct FilterFaceState final : pipeline::StageState {
+    explicit FilterFaceState(const OneEuroSettings& s) : landmarks(s), rotation(s), translation(s), expression(s) {}
+    OneEuroFilter landmarks, rotation, translation, expression;
+    Eigen::Quaterniond last_rotation = Eigen::Quaterniond::Identity();  // keeps q and -q apart
+    // The filters' inputs, sized once.
+    Eigen::VectorXd landmark_sample, rotation_sample = Eigen::VectorXd(4), translation_sample = Eigen::VectorXd(3),
+                                     expression_sample;
+};
+
+class FilterStage final : public pipeline::Stage {
+public:
+    FilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config)
+        : model_(std::move(model)), config_(config) {}
+
+    StageInfo info() const override {
+        if (!config_.enabled) return {"filter", false, "off (TrackerConfig::filter.enabled)"};
+        char detail[96];
+        std::snprintf(detail, sizeof detail, "1-euro (min cutoff %g Hz, beta %g)", config_.min_cutoff_hz, config_.beta);
+        return {"filter", true, detail};
+    }
+
+    std::unique_ptr<pipeline::StageState> newFaceState() const override {
+        return std::make_unique<FilterFaceState>(OneEuroSettings{config_.min_cutoff_hz, config_.beta, config_.derivative_cutoff_hz});
+    }
+
+    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        auto& s = static_cast<FilterFaceState&>(*state);
+        FaceResult& r = face.result;
+        r.raw.landmarks = r.landmarks;
+        r.raw.pose = r.pose;
+        r.raw.expression = r.expression;
+        if (r.landmarks) filterLandmarks(frame.dt, s, *r.landmarks);
+        if (r.pose) filterPose(frame.dt, s, *r.pose);
+        if (r.expression) filterExpression(frame.dt, s, *r.expression);
+        return true;
+    }
+
+private:
+    static void filterLandmarks(double dt, FilterFaceState& s, Landmarks68& points) {
+        s.landmark_sample.resize(2 * static_cast<Eigen::Index>(points.size()));
+        for (std::size_t i = 0; i < points.size(); ++i) s.landmark_sample.segment<2>(2 * i) << points[i].x, points[i].y;
+        const Eigen::VectorXd& smooth = s.landmarks(s.landmark_sample, dt, std::max(1.f, core::eyeCornerDistance(points)));
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            points[i] = {static_cast<float>(smooth[2 * i]), static_cast<float>(smooth[2 * i + 1])};
+        }
+    }
+
+    static void filterPose(double dt, FilterFaceState& s, HeadPose& pose) {
+        Eigen::Quaterniond q(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+        if (q.coeffs().dot(s.last_rotation.coeffs()) < 0.0) q.coeffs() = -q.coeffs();
+        s.last_rotation = q;
+        s.rotation_sample = q.coeffs();
+        const Eigen::Quaterniond smoothRotation(Eigen::Vector4d(s.rotation(s.rotation_sample, dt, 1.0)));
+        s.translation_sample << pose.translation_mm.x, pose.translation_mm.y, pose.translation_mm.z;
+        const Eigen::Vector3d smoothTranslation = s.translation(s.translation_sample, dt, kTranslationScaleMm);
+        pose = fit::headPoseOf(smoothRotation, smoothTranslation);
+    }
+
+    void filterExpression(double dt, FilterFaceState& s, ExpressionResult& e) const {
+        s.expression_sample.resize(static_cast<Eigen::Index>(e.native.size()));
+        for (std::size_t k = 0; k < e.native.size(); ++k) s.expression_sample[k] = e.native[k];
+        const Eigen::VectorXd& smooth = s.expression(s.expression_sample, dt, 1.0);
+        for (std::size_t k = 0; k < e.native.size(); ++k) e.native[k] = static_cast<float>(std::clamp(smooth[k], 0.0, 1.0));
+        e.arkit = model_->toArkit(e.native);
+    }
+
+    std::shared_ptr<const FaceModel> model_;
+    FilterConfig config_;
+};
+
+}  // namespace
+
+std::unique_ptr<pipeline::Stage> makeFilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config) {
+    return std::make_unique<FilterStage>(std::move(model), config);
+}
+
+}  // namespace facetrack::filter

@@ -1,0 +1,131 @@
+#include "fit/fit_stage.hpp"
+
+#include "fit/face_fitter.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace facetrack::fit {
+
+namespace {
+
+// Beyond these the fitted face is not a face in front of a webcam.
+constexpr double kMaxPitchDeg = 70.0, kMaxYawDeg = 80.0;
+constexpr double kMinDepthCm = 10.0, kMaxDepthCm = 1000.0;
+constexpr int kCalibrationStride = 5;  // frames between identity calibration samples
+
+struct FitFaceState final : pipeline::StageState {
+    FitFaceState(const std::shared_ptr<const FitBasis>& basis, int calibrationFrames)
+        : fitter(basis, FitSettings{}), window(static_cast<std::size_t>(calibrationFrames)) {
+        // Sized up front, so that taking a sample copies into place.
+        for (auto& frame : window) frame.params.expression = Eigen::VectorXd::Zero(basis->expressionCount());
+    }
+    FaceFitter fitter;
+    FaceParams params;
+    bool fitted = false;
+    std::vector<CalibrationFrame> window;  // identity calibration samples, the first `samples` taken
+    std::size_t samples = 0;
+    bool calibrated = false;
+};
+
+class FitStage final : public pipeline::Stage {
+public:
+    FitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings, bool haveLandmarks)
+        : model_(std::move(model)), basis_(model_->fitBasis()), settings_(settings), available_(haveLandmarks) {}
+
+    StageInfo info() const override {
+        if (!available_) return {"fit", false, "not available: needs the landmarks stage"};
+        return {"fit", true,
+                "Ceres: pose, " + std::to_string(basis_->expressionCount()) + " expressions, " +
+                    std::to_string(basis_->identityCount()) + " identity modes" +
+                    (settings_.calibration_frames > 0 ? ", identity from " + std::to_string(settings_.calibration_frames) + " frames"
+                                                      : ", mean identity")};
+    }
+
+    std::unique_ptr<pipeline::StageState> newFaceState() const override {
+        return std::make_unique<FitFaceState>(basis_, settings_.calibration_frames);
+    }
+
+    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        auto& s = static_cast<FitFaceState&>(*state);
+        if (!face.result.landmarks) return false;
+        Landmarks2d observed;
+        for (int i = 0; i < model::kLandmarkCount; ++i) observed.col(i) << (*face.result.landmarks)[i].x, (*face.result.landmarks)[i].y;
+        const FitReport report = s.fitter.fit(frame.camera, observed, s.params, s.fitted);
+        s.fitted = true;
+        const Eigen::Vector3d euler = eulerDegrees(s.params.omega());
+        const double depth = s.params.translation().z();
+        if (!(report.residual <= settings_.max_residual) || std::abs(euler.x()) > kMaxPitchDeg ||
+            std::abs(euler.y()) > kMaxYawDeg || !(depth >= kMinDepthCm && depth <= kMaxDepthCm)) {
+            return false;
+        }
+        sampleForCalibration(frame, face, s, observed, report);
+        writeResult(face, s, report);
+        return true;
+    }
+
+    void resetCalibration(pipeline::StageState* state) const override {
+        auto& s = static_cast<FitFaceState&>(*state);
+        s.fitter.setIdentity({});
+        s.calibrated = false;
+        s.samples = 0;
+    }
+
+private:
+    /// Every kCalibrationStride-th well-fitted frame joins the window; a full
+    /// window gives the identity, fitted jointly with every sample's pose and
+    /// expression, then frozen.
+    void sampleForCalibration(const pipeline::FrameInput& frame, const pipeline::FaceTrack& face, FitFaceState& s,
+                              const Landmarks2d& observed, const FitReport& report) const {
+        if (s.calibrated || s.window.empty() || face.age % kCalibrationStride != 0 ||
+            report.residual > 0.5 * settings_.max_residual) {
+            return;
+        }
+        CalibrationFrame& sample = s.window[s.samples++];
+        sample.camera = frame.camera;
+        sample.observed = observed;
+        sample.params.pose = s.params.pose;
+        sample.params.expression = s.params.expression;
+        sample.contour = report.contour;
+        if (s.samples < s.window.size()) return;
+        s.fitter.setIdentity(calibrateIdentity(*basis_, s.window, s.fitter.settings()));
+        s.calibrated = true;
+        s.samples = 0;
+    }
+
+    void writeResult(pipeline::FaceTrack& face, const FitFaceState& s, const FitReport& report) const {
+        FaceResult& r = face.result;
+        r.fit_residual = static_cast<float>(report.residual);
+        r.confidence = std::clamp(1.f - static_cast<float>(report.residual) / settings_.max_residual, 0.f, 1.f);
+        r.pose = headPoseOf(s.params);
+        if (!r.expression) r.expression.emplace();
+        std::vector<float>& native = r.expression->native;
+        native.assign(static_cast<std::size_t>(basis_->native_expression_count), 0.f);
+        for (int k = 0; k < basis_->expressionCount(); ++k) {
+            native[basis_->expressions[k]] = static_cast<float>(std::clamp(s.params.expression[k], 0.0, 1.0));
+        }
+        r.expression->arkit = model_->toArkit(native);
+        const Eigen::VectorXd& identity = s.fitter.identity();
+        r.identity.resize(static_cast<std::size_t>(identity.size()));
+        for (Eigen::Index k = 0; k < identity.size(); ++k) r.identity[k] = static_cast<float>(identity[k]);
+        r.identity_calibrated = s.calibrated;
+        if (!face.next_start) face.next_start.emplace();
+        for (int i = 0; i < model::kLandmarkCount; ++i) {
+            (*face.next_start)[i] = {static_cast<float>(report.projected(0, i)), static_cast<float>(report.projected(1, i))};
+        }
+    }
+
+    std::shared_ptr<const FaceModel> model_;
+    std::shared_ptr<const FitBasis> basis_;
+    FitStageSettings settings_;
+    bool available_;
+};
+
+}  // namespace
+
+std::unique_ptr<pipeline::Stage> makeFitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings,
+                                              bool haveLandmarks) {
+    return std::make_unique<FitStage>(std::move(model), settings, haveLandmarks);
+}
+
+}  // namespace facetrack::fit

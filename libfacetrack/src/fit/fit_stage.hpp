@@ -1,0 +1,30 @@
+#pragma once
+// The "fit" stage: head pose and expression fitted to the landmarks (Ceres,
+// face_fitter.hpp), cold for a new face and warm from the previous frame
+// after that; and the user's identity, estimated once from a window of
+// well-fitted frames, then frozen (calibrateIdentity).
+//
+// Reads: FaceResult::landmarks. Fills: pose, expression, fit_residual,
+// confidence, identity, identity_calibrated, and FaceTrack::next_start (the
+// fitted face's projection, where the next frame's landmark search starts).
+// Loses the face when the residual exceeds max_residual, |pitch| > 70 deg,
+// |yaw| > 80 deg, or the depth leaves [10 cm, 10 m].
+
+#include "pipeline/stage.hpp"
+
+#include "facetrack/face_model.hpp"
+
+#include <memory>
+
+namespace facetrack::fit {
+
+struct FitStageSettings {
+    float max_residual = 0.12f;  ///< TrackerConfig::max_fit_residual
+    int calibration_frames = 30; ///< TrackerConfig::calibration_frames
+};
+
+/// Not available when `haveLandmarks` is false (it fits landmarks).
+std::unique_ptr<pipeline::Stage> makeFitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings,
+                                              bool haveLandmarks);
+
+}  // namespace facetrack::fit

@@ -1,0 +1,75 @@
+#include "landmarks/landmarks_stage.hpp"
+
+#include "core/box.hpp"
+#include "landmarks/lbf.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+namespace facetrack::landmarks {
+
+namespace {
+
+// Beyond these the face is lost.
+constexpr float kMaxOutsideShare = 0.25f;  // landmarks outside the frame
+constexpr float kMinEyeCornersPx = 8.f;
+constexpr double kMinFaceContrast = 4.0;   // grey-level standard deviation inside the landmarks' box
+
+Box boundsOf(const Shape68& shape) {
+    const Eigen::Vector2f lo = shape.rowwise().minCoeff(), hi = shape.rowwise().maxCoeff();
+    return {lo.x(), lo.y(), hi.x(), hi.y()};
+}
+
+/// A face has texture: on a covered lens or a blanked frame the regression
+/// still returns a plausible shape.
+bool hasTexture(const cv::Mat& gray, const Box& box) {
+    const cv::Rect region = cv::Rect(cvRound(box.x0), cvRound(box.y0), cvRound(box.width()) + 1, cvRound(box.height()) + 1) &
+                            cv::Rect(0, 0, gray.cols, gray.rows);
+    if (region.area() <= 0) return false;
+    cv::Scalar mean, deviation;
+    cv::meanStdDev(gray(region), mean, deviation);
+    return deviation[0] >= kMinFaceContrast;
+}
+
+class LandmarksStage final : public pipeline::Stage {
+public:
+    LandmarksStage(std::shared_ptr<const LandmarkModel> model, std::string detectorKind)
+        : model_(std::move(model)), detector_kind_(std::move(detectorKind)) {}
+
+    StageInfo info() const override {
+        if (!model_) return {"landmarks", false, "not available: no landmark model loaded"};
+        return {"landmarks", true, "LBF, " + std::to_string(model_->stageCount()) + " stages (" + model_->sourcePath() + ")"};
+    }
+
+    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {
+        const LbfModel& lbf = model_->data();
+        // Followed faces start from the previous frame's fitted face, projected:
+        // starting from the previous landmarks themselves lets their errors
+        // accumulate (the residual doubled within a second on the clips); the
+        // model's projection is always a plausible face.
+        const Shape68 start = face.fresh || !face.next_start
+                                  ? shapeFromBox(lbf, face.box, detector_kind_)
+                                  : fromLandmarks68(*face.next_start);
+        const Shape68 shape = alignLandmarks(lbf, frame.gray, start);
+        if (!shape.allFinite()) return false;
+        face.result.landmarks = toLandmarks68(shape);
+        face.locate(boundsOf(shape));
+
+        const Box image{0.f, 0.f, static_cast<float>(frame.gray.cols - 1), static_cast<float>(frame.gray.rows - 1)};
+        int outside = 0;
+        for (int i = 0; i < kLandmarks; ++i) outside += !core::contains(image, shape(0, i), shape(1, i));
+        return outside <= kMaxOutsideShare * kLandmarks && (shape.col(36) - shape.col(45)).norm() >= kMinEyeCornersPx &&
+               hasTexture(frame.gray, face.box);
+    }
+
+private:
+    std::shared_ptr<const LandmarkModel> model_;
+    std::string detector_kind_;
+};
+
+}  // namespace
+
+std::unique_ptr<pipeline::Stage> makeLandmarksStage(std::shared_ptr<const LandmarkModel> model, std::string detectorKind) {
+    return std::make_unique<LandmarksStage>(std::move(model), std::move(detectorKind));
+}
+
+}  // namespace facetrack::landmarks

@@ -1,0 +1,197 @@
+#include "track/tracker_core.hpp"
+
+#include "core/box.hpp"
+#include "core/image.hpp"
+#include "facetrack/error.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace facetrack::track {
+
+namespace {
+
+constexpr int kVerifyCropWidth = 128;  // px: the verification crop is detected at this width
+constexpr float kSameFaceIou = 0.3f;   // a detection overlapping a followed face this much is that face
+
+}  // namespace
+
+TrackerCore::TrackerCore(std::unique_ptr<FaceDetector> detector, pipeline::StageList stages, const LifecycleSettings& settings)
+    : detector_(std::move(detector)), stages_(std::move(stages)), settings_(settings),
+      last_time_(std::numeric_limits<double>::quiet_NaN()) {
+    if (!detector_) throw Error("Tracker: no face detector");
+    names_ = {"detect", "verify"};
+    for (const auto& stage : stages_) {
+        if (!stage) throw Error("Tracker: a null stage in the stage list");
+        const StageInfo info = stage->info();
+        names_.push_back(info.name);
+        available_.push_back(info.available);
+    }
+    ms_.assign(names_.size(), 0.0);
+    ran_.assign(names_.size(), false);
+    tracks_.reserve(static_cast<std::size_t>(settings_.max_faces));
+}
+
+std::vector<StageInfo> TrackerCore::stages() const {
+    std::vector<StageInfo> out;
+    out.push_back({"detect", true,
+                   detector_->kind() + " (" + detector_->modelPath() + "), while fewer than " +
+                       std::to_string(settings_.max_faces) + " face(s) are followed"});
+    out.push_back(settings_.verify_interval > 0
+                      ? StageInfo{"verify", true,
+                                  "the detector on a crop around each followed face, every " +
+                                      std::to_string(settings_.verify_interval) + " frames"}
+                      : StageInfo{"verify", false, "off (TrackerConfig::verify_interval is 0)"});
+    for (const auto& stage : stages_) out.push_back(stage->info());
+    return out;
+}
+
+void TrackerCore::time(int slot, Clock::time_point start) {
+    ms_[slot] += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    ran_[slot] = true;
+}
+
+void TrackerCore::addFace(const Box& box, float score) {
+    if (static_cast<int>(tracks_.size()) >= settings_.max_faces) return;
+    const bool known = std::any_of(tracks_.begin(), tracks_.end(), [&](const pipeline::FaceTrack& t) {
+        return core::intersectionOverUnion(t.box, box) > kSameFaceIou ||
+               core::contains(box, 0.5f * (t.box.x0 + t.box.x1), 0.5f * (t.box.y0 + t.box.y1));
+    });
+    if (known) return;
+    pipeline::FaceTrack& face = tracks_.emplace_back();
+    face.id = next_id_++;
+    face.locate(box);
+    face.result.confidence = score;
+    for (const auto& stage : stages_) face.states.push_back(stage->newFaceState());
+}
+
+void TrackerCore::detect(const ImageView& frame) {
+    const auto start = Clock::now();
+    for (const auto& d : detector_->detect(frame)) addFace(d.box, d.score);
+    time(kDetect, start);
+}
+
+bool TrackerCore::verify(const pipeline::FaceTrack& face) {
+    // A crop twice the face's size, detected small: ~1 ms instead of a full-frame search.
+    const float side = 2.f * std::max(face.box.width(), face.box.height());
+    const float cx = 0.5f * (face.box.x0 + face.box.x1), cy = 0.5f * (face.box.y0 + face.box.y1);
+    const cv::Rect wanted(cvRound(cx - side / 2), cvRound(cy - side / 2), cvRound(side), cvRound(side));
+    const cv::Rect region = wanted & cv::Rect(0, 0, gray_.cols, gray_.rows);
+    if (region.area() <= 0) return false;
+    const double scale = std::min(1.0, static_cast<double>(kVerifyCropWidth) / region.width);
+    cv::resize(gray_(region), crop_, cv::Size(), scale, scale, cv::INTER_AREA);
+    for (const auto& d : detector_->detect(core::viewOf(crop_))) {
+        const float x = region.x + 0.5f * (d.box.x0 + d.box.x1) / static_cast<float>(scale);
+        const float y = region.y + 0.5f * (d.box.y0 + d.box.y1) / static_cast<float>(scale);
+        if (core::contains(face.box, x, y)) return true;
+    }
+    return false;
+}
+
+void TrackerCore::runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face) {
+    for (std::size_t k = 0; k < stages_.size() && !face.lost; ++k) {
+        if (!available_[k]) continue;
+        const auto start = Clock::now();
+        face.lost = !stages_[k]->run(input, face, face.states[k].get());
+        time(kFirstStage + static_cast<int>(k), start);
+    }
+    // A face no stage could place is not followed: found again by the next search.
+    if (!face.located) face.lost = true;
+}
+
+void TrackerCore::dropLost() {
+    tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(), [](const pipeline::FaceTrack& t) { return t.lost; }),
+                  tracks_.end());
+}
+
+void TrackerCore::process(const ImageView& frame, double time_s, const std::vector<Box>* boxes, FrameResult& out) {
+    core::wrap(frame);  // validates the view before anything reads it
+    const CameraConfig& c = settings_.camera;
+    pipeline::FrameInput input{frame, gray_,
+                               fit::cameraFor(frame.width, frame.height, c.horizontal_fov_deg, c.focal_length_px,
+                                              c.principal_x_px, c.principal_y_px)};
+    out.camera = {static_cast<float>(input.camera.fx), static_cast<float>(input.camera.fy),
+                  static_cast<float>(input.camera.cx), static_cast<float>(input.camera.cy)};
+    // Time must increase; anything else (repeated, backwards, NaN) counts as one frame at 30 fps.
+    const bool increasing = std::isfinite(time_s) && (!std::isfinite(last_time_) || time_s > last_time_);
+    input.dt = increasing && std::isfinite(last_time_) ? time_s - last_time_ : 1.0 / 30.0;
+    input.time_s = time_s;
+    if (increasing) last_time_ = time_s;
+    const long frameIndex = frame_index_++;
+    std::fill(ms_.begin(), ms_.end(), 0.0);
+    std::fill(ran_.begin(), ran_.end(), false);
+    for (auto& t : tracks_) t.located = false;
+
+    // Faces first: new ones from the detector or the caller, followed ones verified now and then.
+    const int followed = static_cast<int>(tracks_.size());
+    bool searched = false;
+    if (boxes) {
+        for (const Box& box : *boxes) addFace(box, 1.f);
+        searched = true;
+    } else if (followed < settings_.max_faces && (followed == 0 || frameIndex % settings_.detect_interval == 0)) {
+        detect(frame);
+        searched = true;
+    }
+    bool grayReady = false;
+    auto ensureGray = [&] {
+        if (!grayReady) gray_ = core::toGray(frame, gray_);
+        grayReady = true;
+    };
+    if (settings_.verify_interval > 0) {
+        for (auto& t : tracks_) {
+            if (t.fresh || t.age % settings_.verify_interval != 0) continue;
+            ensureGray();
+            const auto start = Clock::now();
+            t.lost = !verify(t);
+            time(kVerify, start);
+        }
+        dropLost();
+    }
+
+    for (int pass = 0; pass < 2; ++pass) {
+        if (!tracks_.empty()) ensureGray();
+        for (auto& t : tracks_) runStages(input, t);
+        dropLost();
+        // Every followed face was lost: look again in this very frame.
+        if (!tracks_.empty() || searched) break;
+        detect(frame);
+        searched = true;
+    }
+
+    out.faces.resize(tracks_.size());
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+        pipeline::FaceTrack& t = tracks_[i];
+        t.result.id = t.id;
+        t.result.tracked = !t.fresh;
+        t.result.box = t.box;
+        out.faces[i] = t.result;
+        t.fresh = false;
+        ++t.age;
+    }
+    std::size_t timings = 0;
+    for (std::size_t slot = 0; slot < names_.size(); ++slot) timings += ran_[slot];
+    out.timings.resize(timings);
+    for (std::size_t slot = 0, j = 0; slot < names_.size(); ++slot) {
+        if (!ran_[slot]) continue;
+        out.timings[j].stage = names_[slot];
+        out.timings[j++].ms = ms_[slot];
+    }
+}
+
+void TrackerCore::reset() {
+    tracks_.clear();
+    last_time_ = std::numeric_limits<double>::quiet_NaN();
+}
+
+void TrackerCore::resetCalibration() {
+    for (auto& t : tracks_) {
+        for (std::size_t k = 0; k < stages_.size(); ++k) {
+            if (t.states[k]) stages_[k]->resetCalibration(t.states[k].get());
+        }
+    }
+}
+
+}  // namespace facetrack::track

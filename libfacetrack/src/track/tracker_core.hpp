@@ -1,0 +1,66 @@
+#pragma once
+// What the public Tracker runs: the track lifecycle (detect, verify,
+// re-detect, ids) around an ordered list of stages, each timed under its own
+// name. Tests drive it with fake detectors and fake stages.
+
+#include "pipeline/stage.hpp"
+
+#include "facetrack/detector.hpp"
+#include "facetrack/tracker.hpp"
+
+#include <chrono>
+#include <memory>
+#include <vector>
+
+namespace facetrack::track {
+
+struct LifecycleSettings {
+    int max_faces = 1;
+    int detect_interval = 15;  ///< TrackerConfig::detect_interval
+    int verify_interval = 30;  ///< TrackerConfig::verify_interval
+    CameraConfig camera;
+};
+
+class TrackerCore {
+public:
+    TrackerCore(std::unique_ptr<FaceDetector> detector, pipeline::StageList stages, const LifecycleSettings& settings);
+
+    /// One frame: find or confirm faces (the detector, or `boxes` when not
+    /// null), run every available stage on every face in list order, drop the
+    /// faces a stage lost (and look again in this frame when none is left),
+    /// and write the faces and per-stage timings into `out`.
+    void process(const ImageView& frame, double time_s, const std::vector<Box>* boxes, FrameResult& out);
+
+    void reset();
+    void resetCalibration();
+
+    /// "detect", "verify", then the stages, in order.
+    std::vector<StageInfo> stages() const;
+
+private:
+    using Clock = std::chrono::steady_clock;
+    static constexpr int kDetect = 0, kVerify = 1, kFirstStage = 2;  // timing slots
+
+    void addFace(const Box& box, float score);
+    void detect(const ImageView& frame);
+    bool verify(const pipeline::FaceTrack& face);  // the detector finds the face again on a crop around it
+    void runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face);
+    void dropLost();
+    void time(int slot, Clock::time_point start);
+
+    std::unique_ptr<FaceDetector> detector_;
+    pipeline::StageList stages_;
+    std::vector<bool> available_;
+    std::vector<std::string> names_;  // per timing slot
+    std::vector<double> ms_;          // per timing slot, this frame
+    std::vector<bool> ran_;
+    LifecycleSettings settings_;
+
+    std::vector<pipeline::FaceTrack> tracks_;
+    cv::Mat gray_, crop_;     // reused frame to frame
+    int next_id_ = 1;
+    long frame_index_ = 0;
+    double last_time_;
+};
+
+}  // namespace facetrack::track
