@@ -1,4 +1,6 @@
+#include "core/math.hpp"
 #include "facetrack/face_model.hpp"
+#include "fit/costs.hpp"
 #include "fit/face_fitter.hpp"
 #include "test_support.hpp"
 
@@ -13,7 +15,7 @@ using fit::Landmarks2d;
 
 struct Scene {
     std::shared_ptr<const FaceModel> model = FaceModel::load(test::shippedFaceModel());
-    std::shared_ptr<const fit::FitBasis> basis = std::make_shared<fit::FitBasis>(fit::buildFitBasis(model->data()));
+    std::shared_ptr<const fit::FitBasis> basis = model->fitBasis();  // built once with the model
     fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
 };
 
@@ -43,7 +45,7 @@ SyntheticFrame randomFrame(const Scene& s, const Eigen::Matrix3Xd& base, std::mt
 
 double rotationErrorDeg(const fit::FaceParams& a, const fit::FaceParams& b) {
     const Eigen::Matrix3d d = fit::rotationOf(a.omega()).transpose() * fit::rotationOf(b.omega());
-    return std::acos(std::clamp((d.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+    return std::acos(std::clamp((d.trace() - 1.0) / 2.0, -1.0, 1.0)) / core::kRadiansPerDegree;
 }
 
 std::vector<int> allExpressions(const Scene& s) {
@@ -258,6 +260,84 @@ TEST(Fit, BadObservationsGiveAnInfiniteResidualNotNaN) {
     EXPECT_TRUE(p.pose.allFinite());
     bad(0, 3) = std::numeric_limits<double>::quiet_NaN();
     EXPECT_TRUE(std::isinf(fitter.fit(s.camera, bad, p, false).residual));
+}
+
+// The hand-written Jacobians against finite differences (ceres::GradientChecker),
+// with and without identity, on landmarks inside the Huber loss's quadratic part
+// and on outliers far in its linear part. Agreement to 1e-5 relative: the finite
+// differences' own error near the Huber threshold is ~1e-6; the iteratively
+// reweighted Jacobian used before (sqrt(rho') de) is off on outliers by a factor up
+// to sqrt(2 - delta / |e|), i.e. up to 41 %.
+class CostGradients : public ::testing::Test {
+protected:
+    void SetUp() override {
+        std::mt19937 rng(11);
+        frame = randomFrame(s, s.basis->neutral, rng, 40.0, 0.0, allExpressions(s));
+        for (int k = 0; k < s.basis->expressionCount(); ++k) frame.truth.expression[k] = 0.05 + 0.02 * (k % 7);
+        identity = Eigen::VectorXd::Zero(s.basis->identityCount());
+        for (int k = 0; k < identity.size(); ++k) identity[k] = 0.3 * std::sin(1.0 + k);
+        // Start the pose a little off the truth, so that every residual is non-zero.
+        pose = frame.truth.pose + (Eigen::Matrix<double, 6, 1>() << 0.02, -0.03, 0.01, 0.3, -0.2, 1.0).finished();
+        scale = fit::eyeCornerDistance(frame.observed);
+    }
+
+    /// Checks the cost at the test's parameters; `outliers` moves that many
+    /// landmarks half a face away, deep into the Huber loss's linear part.
+    ceres::GradientChecker::ProbeResults probe(bool withIdentity, int outliers) {
+        Landmarks2d observed = frame.observed;
+        for (int i = 0; i < outliers; ++i) observed.col(5 * i + 3) += Eigen::Vector2d(0.5 * scale, -0.3 * scale);
+        const fit::LandmarksCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, withIdentity);
+        // Ridders' extrapolation (what GradientChecker uses) from steps small enough
+        // that a residual near the Huber threshold stays on one side of it.
+        ceres::NumericDiffOptions options;
+        options.ridders_relative_initial_step_size = 1e-4;
+        const ceres::GradientChecker checker(&cost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), options);
+        std::vector<const double*> blocks = {pose.data(), frame.truth.expression.data()};
+        if (withIdentity) blocks.push_back(identity.data());
+        ceres::GradientChecker::ProbeResults results;
+        checker.Probe(blocks.data(), 1e-5, &results);
+        return results;
+    }
+
+    Scene s;
+    SyntheticFrame frame;
+    Eigen::VectorXd identity;
+    Eigen::Matrix<double, 6, 1> pose;
+    double scale = 1.0;
+};
+
+TEST_F(CostGradients, LandmarksCostJacobiansMatchFiniteDifferences) {
+    for (const bool withIdentity : {false, true}) {
+        for (const int outliers : {0, 8}) {
+            const auto r = probe(withIdentity, outliers);
+            EXPECT_TRUE(r.return_value);
+            EXPECT_LT(r.maximum_relative_error, 1e-5) << "identity " << withIdentity << ", outliers " << outliers << "\n"
+                                                     << r.error_log;
+        }
+    }
+}
+
+TEST_F(CostGradients, OutliersAreInTheLinearPartOfTheLoss) {
+    // The probe above covers both branches only if the moved landmarks are outliers:
+    // |e| ~ 0.58 face sizes, so |r| = sqrt(2 delta |e| - delta^2) ~ 0.24, well below |e|.
+    Landmarks2d observed = frame.observed;
+    observed.col(3) += Eigen::Vector2d(0.5 * scale, -0.3 * scale);
+    const fit::LandmarksCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, false);
+    const double* blocks[] = {pose.data(), frame.truth.expression.data()};
+    Eigen::VectorXd residuals(2 * model::kLandmarkCount);
+    ASSERT_TRUE(cost.Evaluate(blocks, residuals.data(), nullptr));
+    EXPECT_GT(residuals.segment<2>(6).norm(), 0.15);
+    EXPECT_LT(residuals.segment<2>(6).norm(), 0.35);
+}
+
+TEST(CostGradientsPrior, ShrinkToZeroJacobianMatchesFiniteDifferences) {
+    const fit::ShrinkToZero prior(5, 3e-3);
+    const ceres::GradientChecker checker(&prior, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr),
+                                         ceres::NumericDiffOptions{});
+    const Eigen::VectorXd x = (Eigen::VectorXd(5) << 0.1, -0.4, 0.0, 2.0, 0.7).finished();
+    const double* blocks[] = {x.data()};
+    ceres::GradientChecker::ProbeResults results;
+    EXPECT_TRUE(checker.Probe(blocks, 1e-9, &results)) << results.error_log;
 }
 
 }  // namespace

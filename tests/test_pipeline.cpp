@@ -1,0 +1,251 @@
+// The Tracker's stage machinery with fake stages and a fake detector, in the
+// style of MediaPipe's CalculatorRunner: no models, no images with faces.
+
+#include "pipeline/stage.hpp"
+#include "track/tracker_core.hpp"
+
+#include "facetrack/error.hpp"
+#include "facetrack/tracker.hpp"
+#include "test_support.hpp"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+namespace facetrack {
+namespace {
+
+/// Finds the same box every frame (or none while `present` is false), counting calls.
+class FakeDetector final : public FaceDetector {
+public:
+    explicit FakeDetector(int* calls, const bool* present = nullptr) : calls_(calls), present_(present) {}
+    std::vector<Detection> detect(const ImageView&) override {
+        ++*calls_;
+        if (present_ && !*present_) return {};
+        return {{{20.f, 10.f, 60.f, 50.f}, 0.9f}};
+    }
+    std::string kind() const override { return "fake"; }
+    std::string modelPath() const override { return "none"; }
+
+private:
+    int* calls_;
+    const bool* present_;
+};
+
+struct Counter final : pipeline::StageState {
+    int runs = 0;
+    int resets = 0;
+};
+
+/// Appends its name to a log when it runs, moves the face one pixel right,
+/// writes fit_residual = its index; fails on the frames listed in `failOn`.
+class FakeStage final : public pipeline::Stage {
+public:
+    FakeStage(std::string name, bool available, std::vector<std::string>* log, float index)
+        : name_(std::move(name)), available_(available), log_(log), index_(index) {}
+    std::vector<int> fail_on;  // frame numbers (0-based) on which run() reports a lost face
+    int frame = -1;            // set by the test before each process()
+    Counter seen;              // the face state's counters as of the last run
+
+    StageInfo info() const override { return {name_, available_, available_ ? "fake" : "not available: fake"}; }
+    std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<Counter>(); }
+    bool run(const pipeline::FrameInput& input, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        EXPECT_GT(input.dt, 0.0);
+        EXPECT_EQ(input.gray.cols, input.colour.width);  // grey is ready for every stage
+        log_->push_back(name_);
+        ++static_cast<Counter&>(*state).runs;
+        seen = static_cast<Counter&>(*state);
+        face.result.fit_residual = index_;
+        if (!available_) face.result.gaze.emplace();  // must never happen: the Tracker does not run it
+        Box moved = face.box;
+        moved.x0 += 1.f;
+        moved.x1 += 1.f;
+        face.locate(moved);
+        return std::find(fail_on.begin(), fail_on.end(), frame) == fail_on.end();
+    }
+    void resetCalibration(pipeline::StageState* state) const override { ++static_cast<Counter&>(*state).resets; }
+
+private:
+    std::string name_;
+    bool available_;
+    std::vector<std::string>* log_;
+    float index_;
+};
+
+class StageRunner : public ::testing::Test {
+protected:
+    /// A TrackerCore with stages named `names` (a '-' prefix: not available).
+    void build(const std::vector<std::string>& names, int verifyInterval = 0) {
+        pipeline::StageList stages;
+        for (std::size_t i = 0; i < names.size(); ++i) {
+            const bool available = names[i][0] != '-';
+            auto stage = std::make_unique<FakeStage>(available ? names[i] : names[i].substr(1), available, &log,
+                                                     static_cast<float>(i));
+            fakes.push_back(stage.get());
+            stages.push_back(std::move(stage));
+        }
+        track::LifecycleSettings settings;
+        settings.verify_interval = verifyInterval;
+        core = std::make_unique<track::TrackerCore>(std::make_unique<FakeDetector>(&detections, &present), std::move(stages),
+                                                    settings);
+    }
+    FrameResult& step(const std::vector<Box>* boxes = nullptr) {
+        for (auto* f : fakes) f->frame = frame;
+        log.clear();
+        core->process({pixels.data(), 80, 60, 80, PixelFormat::Gray8}, frame / 30.0, boxes, out);
+        ++frame;
+        return out;
+    }
+    static std::vector<std::string> names(const FrameResult& r) {
+        std::vector<std::string> n;
+        for (const auto& t : r.timings) n.push_back(t.stage);
+        return n;
+    }
+
+    std::vector<std::uint8_t> pixels = std::vector<std::uint8_t>(80 * 60, 100);
+    std::vector<std::string> log;
+    std::vector<FakeStage*> fakes;
+    int detections = 0;
+    bool present = true;
+    int frame = 0;
+    FrameResult out;
+    std::unique_ptr<track::TrackerCore> core;
+};
+
+TEST_F(StageRunner, ListOrderIsExecutionOrderAndTimingOrder) {
+    build({"c", "a", "b"});
+    const FrameResult& first = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"c", "a", "b"}));
+    EXPECT_EQ(names(first), (std::vector<std::string>{"detect", "c", "a", "b"}));
+    for (const auto& t : first.timings) EXPECT_GE(t.ms, 0.0);
+    const FrameResult& second = step();
+    EXPECT_EQ(names(second), (std::vector<std::string>{"c", "a", "b"}));  // followed: no search
+    ASSERT_EQ(second.faces.size(), 1u);
+    EXPECT_TRUE(second.faces[0].tracked);
+    EXPECT_EQ(second.faces[0].fit_residual, 2.f);  // the last stage wrote last
+    EXPECT_EQ(second.faces[0].box.x0, 20.f + 6.f);  // each stage moved the face, two frames of three stages
+    const auto listed = core->stages();
+    ASSERT_EQ(listed.size(), 5u);
+    EXPECT_EQ(listed[0].name, "detect");
+    EXPECT_EQ(listed[1].name, "verify");
+    EXPECT_EQ(listed[2].name, "c");
+    EXPECT_EQ(listed[4].name, "b");
+}
+
+TEST_F(StageRunner, AFailingStageDropsTheFaceAndItIsFoundAgain) {
+    build({"a", "b", "c"});
+    fakes[1]->fail_on = {2};
+    const int firstId = step().faces.at(0).id;
+    step();
+    EXPECT_EQ(detections, 1);
+    // Frame 2: b loses the face, c does not run on it, and the detector looks again in the same frame.
+    const FrameResult& lost = step();
+    EXPECT_EQ(detections, 2);
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "a", "b"}));
+    EXPECT_TRUE(lost.faces.empty());  // the new face failed at b too (still frame 2)
+    const FrameResult& back = step();
+    EXPECT_EQ(detections, 3);
+    ASSERT_EQ(back.faces.size(), 1u);
+    EXPECT_FALSE(back.faces[0].tracked);
+    EXPECT_GT(back.faces[0].id, firstId);
+    EXPECT_EQ(names(back).front(), "detect");
+}
+
+TEST_F(StageRunner, AFaceLeavingIsNotReportedAndIsReDetectedOnReturn) {
+    build({"a"});
+    step();
+    present = false;
+    fakes[0]->fail_on = {1, 2};
+    EXPECT_TRUE(step().faces.empty());
+    EXPECT_TRUE(step().faces.empty());
+    present = true;
+    fakes[0]->fail_on.clear();
+    ASSERT_EQ(step().faces.size(), 1u);
+    EXPECT_FALSE(out.faces[0].tracked);
+}
+
+TEST_F(StageRunner, AStageThatIsNotAvailableNeverRunsAndLeavesItsFieldsEmpty) {
+    build({"a", "-gaze", "b"});
+    for (int i = 0; i < 3; ++i) {
+        const FrameResult& r = step();
+        EXPECT_EQ(log, (std::vector<std::string>{"a", "b"}));
+        ASSERT_EQ(r.faces.size(), 1u);
+        EXPECT_FALSE(r.faces[0].gaze.has_value());
+        const auto n = names(r);
+        EXPECT_EQ(std::count(n.begin(), n.end(), "gaze"), 0);
+    }
+    EXPECT_FALSE(core->stages()[3].available);
+}
+
+TEST_F(StageRunner, WithoutAStageThatLocatesTheFaceItIsDetectedEveryFrame) {
+    build({"-a"});
+    for (int i = 0; i < 3; ++i) {
+        const FrameResult& r = step();
+        ASSERT_EQ(r.faces.size(), 1u);
+        EXPECT_FLOAT_EQ(r.faces[0].confidence, 0.9f);  // the detector's score
+        EXPECT_EQ(r.faces[0].box.x0, 20.f);
+    }
+    EXPECT_EQ(detections, 3);
+}
+
+TEST_F(StageRunner, EveryFaceHasItsOwnStateAndResetCalibrationReachesIt) {
+    build({"a"});
+    step();
+    step();
+    core->resetCalibration();
+    step();
+    EXPECT_EQ(fakes[0]->seen.runs, 3);
+    EXPECT_EQ(fakes[0]->seen.resets, 1);
+    core->reset();  // a new stream: a new face with a new state
+    step();
+    EXPECT_FALSE(out.faces.at(0).tracked);
+    EXPECT_EQ(fakes[0]->seen.runs, 1);
+    EXPECT_EQ(fakes[0]->seen.resets, 0);
+}
+
+TEST_F(StageRunner, CallerBoxesReplaceTheDetector) {
+    build({"a"});
+    const std::vector<Box> boxes = {{5.f, 5.f, 35.f, 35.f}};
+    const FrameResult& r = step(&boxes);
+    EXPECT_EQ(detections, 0);
+    ASSERT_EQ(r.faces.size(), 1u);
+    EXPECT_EQ(r.faces[0].box.x0, 6.f);
+    EXPECT_EQ(names(r), (std::vector<std::string>{"a"}));
+    const std::vector<Box> none;
+    EXPECT_EQ(step(&none).faces.size(), 1u);  // still followed
+    EXPECT_EQ(detections, 0);
+}
+
+TEST_F(StageRunner, VerificationDropsAFaceTheDetectorNoLongerSees) {
+    build({"a"}, 3);
+    for (int i = 0; i < 3; ++i) ASSERT_EQ(step().faces.size(), 1u);
+    present = false;  // the detector no longer finds it on the crop
+    const FrameResult& r = step();
+    EXPECT_TRUE(r.faces.empty());
+    EXPECT_TRUE(log.empty());  // dropped before the stages
+    EXPECT_EQ(names(r), (std::vector<std::string>{"detect", "verify"}));  // verified, lost, searched again
+}
+
+TEST_F(StageRunner, NullStagesAndDetectorsAreRefused) {
+    pipeline::StageList withNull;
+    withNull.push_back(nullptr);
+    EXPECT_THROW(track::TrackerCore(std::make_unique<FakeDetector>(&detections), std::move(withNull), {}), Error);
+    EXPECT_THROW(track::TrackerCore(nullptr, {}, {}), Error);
+}
+
+TEST(TrackerApi, TakesTheApplicationsOwnDetector) {
+    Models models{FaceModel::load(test::shippedFaceModel()), nullptr};
+    int calls = 0;
+    Tracker tracker(models, {}, std::make_unique<FakeDetector>(&calls));
+    EXPECT_EQ(tracker.stages()[0].detail.rfind("fake (none)", 0), 0u) << tracker.stages()[0].detail;
+    std::vector<std::uint8_t> gray(80 * 60, 100);
+    FrameResult out;
+    tracker.process({gray.data(), 80, 60, 80, PixelFormat::Gray8}, 0.0, out);
+    EXPECT_EQ(calls, 1);
+    ASSERT_EQ(out.faces.size(), 1u);
+    EXPECT_EQ(out.faces[0].box.x1, 60.f);
+    EXPECT_THROW(Tracker(models, {}, nullptr), Error);
+}
+
+}  // namespace
+}  // namespace facetrack
