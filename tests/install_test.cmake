@@ -1,5 +1,6 @@
 # ctest script: cmake --install into WORK_DIR/prefix, then configure, build and
-# run the consumer project against that prefix.
+# run the consumer project against that prefix; with DEMO_DIR, build the demo
+# the same way, as a standalone project (the embedding example), and run it.
 file(REMOVE_RECURSE ${WORK_DIR})
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -14,4 +15,10 @@ run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/consumer ${WORK_DIR}/prefix/share/facetrack/models/face_model.ftm)
 if(NOT EXISTS ${WORK_DIR}/prefix/bin/facetrack)
   message(FATAL_ERROR "the facetrack CLI was not installed")
+endif()
+if(DEMO_DIR)
+  run(${CMAKE_COMMAND} -S ${DEMO_DIR} -B ${WORK_DIR}/demo -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
+      -DCMAKE_CXX_FLAGS=-Werror)
+  run(${CMAKE_COMMAND} --build ${WORK_DIR}/demo -j2)
+  run(${WORK_DIR}/demo/facetrack_demo --help)
 endif()

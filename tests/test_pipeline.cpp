@@ -9,6 +9,7 @@
 #include "test_support.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -245,6 +246,20 @@ TEST(TrackerApi, TakesTheApplicationsOwnDetector) {
     ASSERT_EQ(out.faces.size(), 1u);
     EXPECT_EQ(out.faces[0].box.x1, 60.f);
     EXPECT_THROW(Tracker(models, {}, nullptr), Error);
+
+    // The caller's box instead of the detector; the camera's principal point as configured.
+    TrackerConfig config;
+    config.camera.principal_x_px = 30.0;
+    config.camera.principal_y_px = 20.0;
+    Tracker boxed(models, config, std::make_unique<FakeDetector>(&calls));
+    boxed.process({gray.data(), 80, 60, 80, PixelFormat::Gray8}, 0.0, {{1.f, 2.f, 31.f, 32.f}}, out);
+    EXPECT_EQ(calls, 1);
+    ASSERT_EQ(out.faces.size(), 1u);
+    EXPECT_EQ(out.faces[0].box.y0, 2.f);
+    EXPECT_EQ(out.camera.cx, 30.f);
+    EXPECT_EQ(out.camera.cy, 20.f);
+    config.camera.principal_x_px = std::nan("");
+    EXPECT_THROW(Tracker(models, config, std::make_unique<FakeDetector>(&calls)), Error);
 }
 
 }  // namespace
