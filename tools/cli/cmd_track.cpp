@@ -75,9 +75,11 @@ Json faceJson(const FaceResult& face, bool raw) {
         j["gaze"] = {{"left", eye(face.gaze->left)}, {"right", eye(face.gaze->right)}};
     }
     if (raw) {
-        j["raw"] = {{"landmarks", landmarksOrNull(face.raw.landmarks)},
-                    {"pose", poseJson(face.raw.pose)},
-                    {"blendshapes", blendshapesJson(face.raw.expression)}};
+        // With the filter off (no raw values) the fields themselves are the unfiltered ones.
+        const bool filtered = face.raw.landmarks || face.raw.pose || face.raw.expression;
+        j["raw"] = {{"landmarks", landmarksOrNull(filtered ? face.raw.landmarks : face.landmarks)},
+                    {"pose", poseJson(filtered ? face.raw.pose : face.pose)},
+                    {"blendshapes", blendshapesJson(filtered ? face.raw.expression : face.expression)}};
     }
     return j;
 }

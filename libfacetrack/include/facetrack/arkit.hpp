@@ -8,6 +8,8 @@
 /// Mapping from the ICT-FaceKit model: `X_L` -> `XLeft`, `X_R` -> `XRight`;
 /// browInnerUp and cheekPuff are the mean of their _L/_R pair; tongueOut is
 /// not modelled and is always 0.
+///
+/// Constant data: safe from any thread.
 
 #include <array>
 #include <string_view>

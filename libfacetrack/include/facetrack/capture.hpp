@@ -4,10 +4,15 @@
 /// negotiate YUYV or MJPEG at a requested size and rate, stream through
 /// memory-mapped buffers and hand out BGR frames ready for Tracker::process.
 ///
+/// Ownership and threads: a CameraCapture owns its device and its frame
+/// buffers and is used by one thread at a time; CapturedFrame owns its pixels.
+/// Optional at build time (FACETRACK_WITH_V4L2): without it, opening throws.
+///
 ///     facetrack::CameraCapture camera({"/dev/video0", 640, 480, 30.0});
 ///     facetrack::CapturedFrame frame;
+///     facetrack::FrameResult result;  // reused frame to frame
 ///     while (camera.read(frame) != facetrack::CaptureStatus::Disconnected) {
-///         if (frame.width > 0) tracker.process(frame.view(), frame.timestamp_s);
+///         if (frame.width > 0) tracker.process(frame.view(), frame.timestamp_s, result);
 ///     }
 ///
 /// Opening fails with a facetrack::Error that says what to do: which

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Everything in facetrack's public API.
+/// Everything in facetrack's public API. Each header states what it owns and
+/// which of its calls may run on which threads.
 
 #include "facetrack/arkit.hpp"
 #include "facetrack/capture.hpp"
@@ -10,6 +11,7 @@
 #include "facetrack/geometry.hpp"
 #include "facetrack/image.hpp"
 #include "facetrack/landmark_model.hpp"
+#include "facetrack/posed_mesh.hpp"
 #include "facetrack/result.hpp"
 #include "facetrack/tracker.hpp"
 #include "facetrack/version.hpp"

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// Plain value types shared by the results. Lengths in 3D are millimetres
-/// everywhere in the public API; image positions are pixels.
+/// everywhere in the public API; image positions are pixels. Plain values.
 
 #include <array>
 

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// A non-owning view of caller-owned pixels: the frame type going into facetrack.
+/// A non-owning view of caller-owned pixels: the frame type going into
+/// facetrack. facetrack never keeps a view past the call it was given to.
 
 #include <cstddef>
 #include <cstdint>

@@ -5,7 +5,8 @@
 /// the current shape's padded convex hull (Shi, thesis ch. 4). Trained by
 /// tools/train_landmarks; docs/landmarks.md has the details.
 ///
-/// Like FaceModel, it is data: load it once, it is immutable, share it.
+/// Like FaceModel, it is data: load it once, it is immutable, share it (by
+/// shared_ptr) between any number of Trackers on any threads.
 
 #include <cstdint>
 #include <memory>

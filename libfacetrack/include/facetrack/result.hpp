@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// What the Tracker returns for a frame.
+/// What the Tracker returns for a frame: plain values that own their data
+/// (copy them, keep them, hand them to another thread).
 ///
 /// A stage that is not available, or did not run for a face, leaves its field
 /// empty (std::nullopt): facetrack never fills a field with made-up values.

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Library version and where facetrack looks for its models.
+/// Library version, where facetrack looks for its models, and its log.
+/// All of these may be called from any thread.
 
 #include <functional>
 #include <string>
