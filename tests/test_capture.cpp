@@ -124,6 +124,8 @@ TEST(Capture, MjpegRejectsTornGarbageAndWrongSizedFrames) {
     EXPECT_FALSE(capture::decodeMjpeg(nullptr, 0, 64, 48, bgr));
 }
 
+#if FACETRACK_WITH_V4L2
+
 std::string openError(const CaptureSettings& settings) {
     try {
         CameraCapture camera(settings);
@@ -361,6 +363,20 @@ TEST(CaptureStream, UnplugIsReportedAndReleasesTheDevice) {
     EXPECT_EQ(fake->mapped, 0);
     EXPECT_EQ(camera.read(frame), CaptureStatus::Disconnected);  // and stays so, without touching the device
 }
+
+#else
+
+TEST(Capture, WithoutV4l2OpeningSaysCaptureIsNotInTheBuild) {
+    try {
+        CameraCapture camera(CaptureSettings{});
+        ADD_FAILURE() << "opened a camera in a build without V4L2";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("FACETRACK_WITH_V4L2=OFF"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(CameraCapture::listDevices().empty());
+}
+
+#endif  // FACETRACK_WITH_V4L2
 
 TEST(Capture, FrameViewDescribesItsPixels) {
     CapturedFrame frame;
