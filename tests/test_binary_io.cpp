@@ -1,4 +1,5 @@
 #include "core/binary_io.hpp"
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +9,7 @@
 namespace facetrack::core {
 namespace {
 
-std::string tempPath(const std::string& name) {
-    return (std::filesystem::temp_directory_path() / ("facetrack_test_" + name)).string();
-}
+using test::tempPath;
 
 std::string slurp(const std::string& path) {
     std::ifstream in(path, std::ios::binary);

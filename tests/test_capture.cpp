@@ -5,6 +5,7 @@
 #include "capture/video_device.hpp"
 #include "facetrack/capture.hpp"
 #include "facetrack/error.hpp"
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -145,7 +146,7 @@ TEST(Capture, MissingDeviceSaysWhichDevicesExist) {
 }
 
 TEST(Capture, FilesAndNonVideoDevicesAreRefusedClearly) {
-    const auto file = std::filesystem::temp_directory_path() / "facetrack_not_a_camera";
+    const auto file = std::filesystem::path(test::tempPath("not_a_camera"));
     std::ofstream(file) << "x";
     EXPECT_NE(openError({file.string()}).find("is not a device node"), std::string::npos);
     std::filesystem::remove(file);

@@ -99,7 +99,7 @@ TEST(Detector, CascadeFindsTheAnnotatedFace) {
 }
 
 TEST(Detector, FallsBackToTheCascadeWithoutYuNetAndSaysSo) {
-    const fs::path empty = fs::temp_directory_path() / "facetrack_test_empty";
+    const fs::path empty = fs::path(test::tempPath("empty"));
     fs::create_directories(empty);
     ScopedEnv shared("FACETRACK_SHARED_DIR", empty.string());
     ScopedEnv models("FACETRACK_MODEL_DIR", empty.string());
@@ -129,7 +129,7 @@ TEST(Detector, ExplicitMissingModelIsAnErrorNotAFallback) {
 }
 
 TEST(Detector, ACorruptModelFileIsAnError) {
-    const std::string path = (fs::temp_directory_path() / "facetrack_test_bad.onnx").string();
+    const std::string path = test::tempPath("bad.onnx");
     std::ofstream(path) << "not an onnx model";
     DetectorConfig config;
     config.yunet_model = path;

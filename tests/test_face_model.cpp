@@ -32,7 +32,7 @@ model::FaceModelData tinyModel() {
 }
 
 std::string copyOfShippedModel(const std::string& name) {
-    const std::string path = (fs::temp_directory_path() / ("facetrack_test_" + name)).string();
+    const std::string path = test::tempPath(name);
     fs::copy_file(test::shippedFaceModel(), path, fs::copy_options::overwrite_existing);
     return path;
 }
@@ -48,7 +48,7 @@ std::string loadError(const std::string& path) {
 
 TEST(FaceModelFile, WriteReadRoundTrip) {
     const model::FaceModelData d = tinyModel();
-    const std::string path = (fs::temp_directory_path() / "facetrack_test_tiny.ftm").string();
+    const std::string path = test::tempPath("tiny.ftm");
     model::writeFaceModel(path, d);
     const model::FaceModelData back = model::readFaceModel(path);
     fs::remove(path);
@@ -74,7 +74,7 @@ TEST(FaceModelFile, WriteReadRoundTrip) {
 TEST(FaceModelFile, InconsistentDataIsNotWritten) {
     model::FaceModelData d = tinyModel();
     d.triangles.push_back({0, 1, 99});
-    EXPECT_THROW(model::writeFaceModel((fs::temp_directory_path() / "facetrack_bad.ftm").string(), d), Error);
+    EXPECT_THROW(model::writeFaceModel(test::tempPath("bad.ftm"), d), Error);
 }
 
 TEST(ShippedFaceModel, HasWhatTheTrackerNeeds) {
@@ -185,7 +185,7 @@ TEST(ShippedFaceModel, FrontalLandmarksMatchThe300WMeanShape) {
 // The shipped file is exactly what the converter makes from ../shared.
 TEST(ShippedFaceModel, ConverterReproducesTheShippedFile) {
     FACETRACK_REQUIRE_SHARED();
-    const std::string out = (fs::temp_directory_path() / "facetrack_test_converted.ftm").string();
+    const std::string out = test::tempPath("converted.ftm");
     const std::string cmd = std::string(FACETRACK_CONVERTER) + " --source '" + test::sharedDir() +
                             "/models/ict-facekit/FaceXModel' --out '" + out + "' > /dev/null";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;

@@ -149,7 +149,7 @@ TEST(LbfModelFile, RegressionRowsAreQuantisedWithinHalfAStep) {
 TEST(LbfModelFile, RoundTripAndCorruption) {
     TinySet set = trainTiny(30, 5);
     trainLbfStage(set.model, set.images, set.samples, tinyOptions());
-    const std::string path = (fs::temp_directory_path() / "facetrack_test_lbf.ftm").string();
+    const std::string path = test::tempPath("lbf.ftm");
     writeLbfModel(path, set.model);
     const LbfModel back = readLbfModel(path);
     EXPECT_EQ(back.mean_shape, set.model.mean_shape);

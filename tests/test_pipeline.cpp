@@ -47,11 +47,13 @@ public:
     std::vector<int> fail_on;  // frame numbers (0-based) on which run() reports a lost face
     int frame = -1;            // set by the test before each process()
     Counter seen;              // the face state's counters as of the last run
+    double dt = 0.0;           // the last run's FrameInput::dt
 
     StageInfo info() const override { return {name_, available_, available_ ? "fake" : "not available: fake"}; }
     std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<Counter>(); }
     bool run(const pipeline::FrameInput& input, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         EXPECT_GT(input.dt, 0.0);
+        dt = input.dt;
         EXPECT_EQ(input.gray.cols, input.colour.width);  // grey is ready for every stage
         log_->push_back(name_);
         ++static_cast<Counter&>(*state).runs;
@@ -202,6 +204,20 @@ TEST_F(StageRunner, EveryFaceHasItsOwnStateAndResetCalibrationReachesIt) {
     EXPECT_FALSE(out.faces.at(0).tracked);
     EXPECT_EQ(fakes[0]->seen.runs, 1);
     EXPECT_EQ(fakes[0]->seen.resets, 0);
+}
+
+TEST_F(StageRunner, TimeThatDoesNotIncreaseCountsAsOneFrameAt30Fps) {
+    build({"a"});
+    auto at = [&](double t) {
+        core->process({pixels.data(), 80, 60, 80, PixelFormat::Gray8}, t, nullptr, out);
+        return fakes[0]->dt;
+    };
+    EXPECT_NEAR(at(10.0), 1.0 / 30, 1e-12);  // the first frame
+    EXPECT_NEAR(at(10.5), 0.5, 1e-12);
+    EXPECT_NEAR(at(10.5), 1.0 / 30, 1e-12);  // repeated
+    EXPECT_NEAR(at(9.0), 1.0 / 30, 1e-12);   // backwards
+    EXPECT_NEAR(at(std::nan("")), 1.0 / 30, 1e-12);
+    EXPECT_NEAR(at(11.0), 0.5, 1e-12);       // measured from the last good time
 }
 
 TEST_F(StageRunner, CallerBoxesReplaceTheDetector) {

@@ -27,6 +27,12 @@ inline std::string sharedDir() { return core::sharedDirectory(); }
     } while (0)
 
 inline std::string sourceDir() { return FACETRACK_TEST_SOURCE_DIR; }
+
+/// A scratch file path of this test process's own: ctest runs tests in
+/// parallel processes, which must not share a file.
+inline std::string tempPath(const std::string& name) {
+    return (std::filesystem::temp_directory_path() / ("facetrack_test_" + std::to_string(::getpid()) + "_" + name)).string();
+}
 inline std::string shippedFaceModel() { return sourceDir() + "/models/face_model.ftm"; }
 
 struct CommandRun {

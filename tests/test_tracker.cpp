@@ -73,6 +73,20 @@ TEST(Tracker, StagesSayWhatIsNotAvailable) {
     EXPECT_FALSE(off[6].available);
 }
 
+TEST(Tracker, TrackersShareTheModelsFitBasisInsteadOfBuildingTheirOwn) {
+    const Models models = faceOnly();
+    const auto& basis = models.face->fitBasis();
+    ASSERT_TRUE(basis);
+    const long before = basis.use_count();
+    TrackerConfig config;
+    config.detector.kind = DetectorKind::Cascade;
+    {
+        const Tracker a(models, config), b(models, config);
+        EXPECT_EQ(basis.use_count(), before + 2);  // each tracker's fit stage holds the model's one basis
+    }
+    EXPECT_EQ(basis.use_count(), before);
+}
+
 TEST(Tracker, MaxFacesLimitsTheResult) {
     FACETRACK_REQUIRE_SHARED();
     // An AFW photo with two people.
