@@ -20,7 +20,7 @@ if(NOT EXISTS ${WORK_DIR}/prefix/bin/facetrack)
 endif()
 if(DEMO_DIR)
   run(${CMAKE_COMMAND} -S ${DEMO_DIR} -B ${WORK_DIR}/demo -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
-      -DCMAKE_CXX_FLAGS=-Werror)
+      "-DCMAKE_CXX_FLAGS=-Wall -Wextra -Werror")
   run(${CMAKE_COMMAND} --build ${WORK_DIR}/demo -j2)
   run(${WORK_DIR}/demo/facetrack_demo --help)
 endif()
