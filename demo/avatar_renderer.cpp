@@ -150,18 +150,18 @@ AvatarRenderer::~AvatarRenderer() {
     glDeleteProgram(program_);
 }
 
-std::vector<Vec3> AvatarRenderer::posedMesh(const AvatarState& state) const {
-    auto mesh = model_->vertices(state.identity, state.expression);
+void AvatarRenderer::pose(const AvatarState& state, std::vector<Vec3>& mesh) const {
+    model_->vertices(state.identity, state.expression, mesh);
     if (state.gaze) {
         // Gaze is in the camera frame; the mesh is in the model frame.
         eyes_[0].turn(mesh, rotateBack(state.rotation, state.gaze->left.direction));
         eyes_[1].turn(mesh, rotateBack(state.rotation, state.gaze->right.direction));
     }
-    return mesh;
 }
 
 void AvatarRenderer::draw(const AvatarState& state, int x, int y, int width, int height, bool mirror) {
-    const auto mesh = posedMesh(state);
+    pose(state, mesh_);
+    const std::vector<Vec3>& mesh = mesh_;
     const std::size_t n = mesh.size();
 
     // Area-weighted vertex normals.

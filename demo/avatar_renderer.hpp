@@ -41,10 +41,10 @@ public:
     /// (GL's bottom-left origin). `mirror` flips it left-right.
     void draw(const AvatarState& state, int x, int y, int width, int height, bool mirror);
 
-    /// The mesh draw() shows for `state`, in model-frame millimetres, before the head rotation.
-    std::vector<Vec3> posedMesh(const AvatarState& state) const;
-
 private:
+    /// The mesh draw() shows for `state`, in model-frame millimetres, before the head rotation.
+    void pose(const AvatarState& state, std::vector<Vec3>& mesh) const;
+
     std::shared_ptr<const FaceModel> model_;
     std::array<EyeRig, 2> eyes_;
     std::vector<std::uint32_t> indices_;  // triangles drawn (not the see-through shells)
@@ -53,6 +53,7 @@ private:
     GLuint program_ = 0, vao_ = 0, geometry_vbo_ = 0, colour_vbo_ = 0, ebo_ = 0;
     std::vector<float> geometry_;      // per vertex: position xyz, normal xyz (reused)
     std::vector<glm::vec3> normals_;   // per vertex, accumulated per frame (reused)
+    std::vector<Vec3> mesh_;           // the posed mesh (reused)
 };
 
 }  // namespace facetrack::demo
