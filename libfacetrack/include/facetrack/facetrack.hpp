@@ -4,6 +4,7 @@
 /// which of its calls may run on which threads.
 
 #include "facetrack/arkit.hpp"
+#include "facetrack/async_tracker.hpp"
 #include "facetrack/capture.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
