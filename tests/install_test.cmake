@@ -18,6 +18,10 @@ run(${WORK_DIR}/build/consumer ${WORK_DIR}/prefix/share/facetrack/models/face_mo
 if(NOT EXISTS ${WORK_DIR}/prefix/bin/facetrack)
   message(FATAL_ERROR "the facetrack CLI was not installed")
 endif()
+file(GLOB c_library ${WORK_DIR}/prefix/lib*/libfacetrack_c.so)
+if(NOT c_library OR NOT EXISTS ${WORK_DIR}/prefix/include/facetrack/facetrack.h)
+  message(FATAL_ERROR "the C API (libfacetrack_c.so, facetrack/facetrack.h) was not installed")
+endif()
 if(DEMO_DIR)
   run(${CMAKE_COMMAND} -S ${DEMO_DIR} -B ${WORK_DIR}/demo -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
       "-DCMAKE_CXX_FLAGS=-Wall -Wextra -Werror")
