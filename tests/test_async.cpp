@@ -131,7 +131,10 @@ TEST(AsyncTracker, ASlowConsumerSeesTheNewestAndNothingQueuesUp) {
     for (std::size_t i = 1; i < seen.size(); ++i) ASSERT_GT(seen[i], seen[i - 1]);
     EXPECT_EQ(latest.frame_number, 4999);  // the last frame is always tracked
     // 5000 frames of 400x300 would be 1.8 GB queued; one frame's buffers and two results are what stays.
+    // (Not under ASan: its quarantine keeps freed memory resident on purpose.)
+#if !defined(__SANITIZE_ADDRESS__)
     EXPECT_LT(maxRssKb() - rssEarly, 16 * 1024) << "memory grew from " << rssEarly << " kB to " << maxRssKb() << " kB";
+#endif
     std::printf("a frame every 0.2 ms: %ld read, %ld tracked, %ld dropped, %zu results seen by a 25 Hz consumer\n",
                 stats.frames_read, stats.frames_tracked, stats.frames_dropped, seen.size());
 }
