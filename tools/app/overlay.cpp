@@ -1,6 +1,5 @@
 #include "overlay.hpp"
 
-
 #include <opencv2/imgproc.hpp>
 
 namespace facetrack::tools {
