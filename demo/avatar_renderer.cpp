@@ -161,7 +161,12 @@ void AvatarRenderer::pose(const AvatarState& state, std::vector<Vec3>& mesh) con
 
 void AvatarRenderer::draw(const AvatarState& state, int x, int y, int width, int height, bool mirror) {
     pose(state, mesh_);
-    const std::vector<Vec3>& mesh = mesh_;
+    drawMesh(mesh_, state.rotation, x, y, width, height, mirror);
+}
+
+void AvatarRenderer::drawMesh(const std::vector<Vec3>& mesh, const Quaternion& rotation, int x, int y, int width, int height,
+                              bool mirror) {
+    if (mesh.size() != static_cast<std::size_t>(model_->vertexCount())) throw Error("AvatarRenderer: the mesh is not the model's");
     const std::size_t n = mesh.size();
 
     // Area-weighted vertex normals.
@@ -183,7 +188,7 @@ void AvatarRenderer::draw(const AvatarState& state, int x, int y, int width, int
 
     // HeadPose::rotation maps the model frame into OpenCV's camera frame (y
     // down, z forward); GL's eye frame has y up and z backward, hence flip.
-    const glm::quat q(state.rotation.w, state.rotation.x, state.rotation.y, state.rotation.z);
+    const glm::quat q(rotation.w, rotation.x, rotation.y, rotation.z);
     const glm::mat4 camera_to_gl = glm::scale(glm::mat4(1.f), glm::vec3(1.f, -1.f, -1.f));
     const glm::mat4 model = camera_to_gl * glm::mat4_cast(glm::normalize(q)) * glm::translate(glm::mat4(1.f), -pivot_);
     const glm::vec3 eye(0.f, 0.f, view_distance_);

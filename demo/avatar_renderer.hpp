@@ -40,6 +40,9 @@ public:
     /// Draws into the viewport (x, y, width, height) of the bound framebuffer
     /// (GL's bottom-left origin). `mirror` flips it left-right.
     void draw(const AvatarState& state, int x, int y, int width, int height, bool mirror);
+    /// The same for a mesh posed already (MeshPoser::modelFrame of the face:
+    /// identity, expression and eyes applied), turned by `rotation`.
+    void drawMesh(const std::vector<Vec3>& mesh, const Quaternion& rotation, int x, int y, int width, int height, bool mirror);
 
 private:
     /// The mesh draw() shows for `state`, in model-frame millimetres, before the head rotation.

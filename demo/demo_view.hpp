@@ -7,6 +7,8 @@
 #include "app/overlay.hpp"
 #include "image_quad.hpp"
 
+#include "facetrack/posed_mesh.hpp"
+
 #include "facetrack/result.hpp"
 
 #include <opencv2/core.hpp>
@@ -40,6 +42,8 @@ public:
     static cv::Size panelSizeFor(cv::Size frameSize);
 
 private:
+    MeshPoser poser_;
+    std::vector<Vec3> mesh_;  // the first face's posed mesh, reused
     tools::OverlayRenderer overlay_;
     AvatarRenderer avatar_;
     ImageQuad image_;

@@ -33,12 +33,13 @@ OverlayRenderer::OverlayRenderer(std::shared_ptr<const FaceModel> model) : poser
     axes_origin_ = m.landmarkVertices()[27];
 }
 
-void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result) {
-    for (const auto& face : result.faces) {
+void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result, const std::vector<Vec3>* firstFaceMesh) {
+    for (std::size_t f = 0; f < result.faces.size(); ++f) {
+        const FaceResult& face = result.faces[f];
         if (face.pose && face.expression) {
             const Projector projector{result.camera, *face.pose};
-            poser_.modelFrame(face, mesh_);
-            const std::vector<Vec3>& vertices = mesh_;
+            if (f > 0 || !firstFaceMesh) poser_.modelFrame(face, mesh_);
+            const std::vector<Vec3>& vertices = f == 0 && firstFaceMesh ? *firstFaceMesh : mesh_;
             std::vector<cv::Point3f>& cam = camera_;
             cam.resize(vertices.size());
             for (std::size_t i = 0; i < vertices.size(); ++i) cam[i] = projector.toCamera(vertices[i]);

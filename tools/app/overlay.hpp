@@ -18,8 +18,10 @@ namespace facetrack::tools {
 class OverlayRenderer {
 public:
     explicit OverlayRenderer(std::shared_ptr<const FaceModel> model);
-    /// Not thread-safe: reuses its mesh buffers from call to call.
-    void draw(cv::Mat& bgr, const FrameResult& result);
+    /// Not thread-safe: reuses its mesh buffers from call to call. A caller
+    /// that has posed the first face's mesh already (MeshPoser::modelFrame)
+    /// passes it as `firstFaceMesh`, so that it is not posed twice.
+    void draw(cv::Mat& bgr, const FrameResult& result, const std::vector<Vec3>* firstFaceMesh = nullptr);
 
 private:
     MeshPoser poser_;
