@@ -53,6 +53,12 @@ private:
     bool fail_at_end_;
 };
 
+/// Waits (at most 60 s) until the tracker has tracked all its source gave.
+void waitUntilFinished(const AsyncTracker& tracking) {
+    const auto deadline = Clock::now() + std::chrono::seconds(60);
+    while (!tracking.stats().finished && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+}
+
 long maxRssKb() {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
@@ -141,8 +147,7 @@ TEST(AsyncTracker, AClipTrackedFrameByFrameDropsNothing) {
     options.realtime = false;
     AsyncTracker tracking(Models::loadDefault(), {},
                           openMediaSource(test::sharedDir() + "/data/clips/liveportrait_d0_greenscreen_gaze_smile.mp4"), options);
-    const auto deadline = Clock::now() + std::chrono::seconds(60);
-    while (!tracking.stats().finished && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    waitUntilFinished(tracking);
     const AsyncStats stats = tracking.stats();
     EXPECT_TRUE(stats.finished);
     EXPECT_EQ(stats.frames_read, 78);
@@ -183,8 +188,7 @@ TEST(AsyncTracker, ReportsASourceThatFailsAndRefusesBadSetups) {
     FACETRACK_REQUIRE_SHARED();
     const auto frames = clipFrames(5);
     AsyncTracker tracking(Models::loadDefault(), {}, std::make_unique<FakeCamera>(frames, std::chrono::milliseconds(1), 5, true));
-    const auto deadline = Clock::now() + std::chrono::seconds(30);
-    while (!tracking.stats().finished && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    waitUntilFinished(tracking);
     const AsyncStats stats = tracking.stats();
     EXPECT_TRUE(stats.finished);
     EXPECT_EQ(stats.error, "the fake camera broke");

@@ -2,7 +2,7 @@
 #include "app/media.hpp"
 #include "plot.hpp"
 
-#include "core/image.hpp"
+#include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <algorithm>
@@ -55,7 +55,7 @@ int runBench(const std::vector<std::string>& argv) {
     bool wasCalibrated = false;
     for (std::size_t i = 0; i < frames.size(); ++i) {
         const auto start = std::chrono::steady_clock::now();
-        tracker.process(core::viewOf(frames[i].bgr), frames[i].time_s, result);
+        tracker.process(tools::viewOf(frames[i].bgr), frames[i].time_s, result);
         total.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
         withFace += result.faces.empty() ? 0 : 1;
         const bool calibrated = !result.faces.empty() && result.faces[0].identity_calibrated;

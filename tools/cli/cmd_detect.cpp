@@ -2,7 +2,7 @@
 #include "json.hpp"
 #include "app/media.hpp"
 
-#include "core/image.hpp"
+#include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <iostream>
@@ -24,7 +24,7 @@ int runDetect(const std::vector<std::string>& argv) {
     MediaFrame frame;
     while (reader.next(frame)) {
         Json faces = Json::array();
-        for (const auto& d : detector->detect(core::viewOf(frame.bgr))) {
+        for (const auto& d : detector->detect(tools::viewOf(frame.bgr))) {
             faces.push_back({{"box", boxJson(d.box)},
                              {"score", round2(d.score)}});
         }

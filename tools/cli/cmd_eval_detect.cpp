@@ -2,7 +2,7 @@
 #include "app/media.hpp"
 #include "common/faces300w.hpp"
 
-#include "core/image.hpp"
+#include "app/image_view.hpp"
 #include "core/pts.hpp"
 #include "facetrack/facetrack.hpp"
 
@@ -61,7 +61,7 @@ int runEvalDetect(const std::vector<std::string>& argv) {
         const auto points = core::readPts(pts);
 
         const auto start = std::chrono::steady_clock::now();
-        const auto detections = detector->detect(core::viewOf(bgr));
+        const auto detections = detector->detect(tools::viewOf(bgr));
         const std::chrono::duration<double, std::milli> elapsed = std::chrono::steady_clock::now() - start;
 
         bool found = false;

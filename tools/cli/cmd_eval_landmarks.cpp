@@ -3,7 +3,7 @@
 #include "json.hpp"
 #include "common/faces300w.hpp"
 
-#include "core/image.hpp"
+#include "app/image_view.hpp"
 #include "core/pts.hpp"
 #include "facetrack/facetrack.hpp"
 #include "landmarks/lbf.hpp"
@@ -130,7 +130,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         if (bgr.empty()) throw Error("cannot read image '" + faces[k].image + "'");
         const Shape2 truth = core::readPts(faces[k].pts);
         if (truth.cols() != 68) throw Error("'" + faces[k].pts + "' does not have 68 points");
-        const auto box = tools::matchingBox(detector->detect(core::viewOf(bgr)), truth);
+        const auto box = tools::matchingBox(detector->detect(tools::viewOf(bgr)), truth);
         if (!box) {
             ++missed;
             continue;

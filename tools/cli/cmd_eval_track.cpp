@@ -1,7 +1,7 @@
 #include "commands.hpp"
 #include "app/media.hpp"
 
-#include "core/image.hpp"
+#include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <dlib/image_processing.h>
@@ -94,7 +94,7 @@ int runEvalTrack(const std::vector<std::string>& argv) {
         double seconds = 0.0;
         for (const auto& f : frames) {
             const auto start = std::chrono::steady_clock::now();
-            const FrameResult r = tracker.process(core::viewOf(f.bgr), f.time_s);
+            const FrameResult r = tracker.process(tools::viewOf(f.bgr), f.time_s);
             seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const bool face = !r.faces.empty() && r.faces[0].landmarks;
             filtered.push_back(face ? r.faces[0].landmarks : std::nullopt);

@@ -2,7 +2,7 @@
 #include "json.hpp"
 #include "app/media.hpp"
 
-#include "core/image.hpp"
+#include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"
 #include "landmarks/lbf.hpp"
 
@@ -65,7 +65,7 @@ int runLandmarks(const std::vector<std::string>& argv) {
         cv::cvtColor(frame.bgr, gray, cv::COLOR_BGR2GRAY);
         std::vector<Detection> faces;
         if (givenBox) faces.push_back({*givenBox, 0.f});
-        else faces = detector->detect(core::viewOf(frame.bgr));
+        else faces = detector->detect(tools::viewOf(frame.bgr));
         Json list = Json::array();
         for (const auto& face : faces) {
             const auto shape = landmarks::alignLandmarks(model->data(), gray,

@@ -4,7 +4,7 @@
 #include "app/overlay.hpp"
 
 #include "core/environment.hpp"
-#include "core/image.hpp"
+#include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -163,7 +163,7 @@ int runTrack(const std::vector<std::string>& argv) {
     while ((maxFrames < 0 || frames < maxFrames) && reader.next(frame)) {
         const auto start = std::chrono::steady_clock::now();
         if (reader.isStillImages()) tracker.reset();  // unrelated photos: nothing to follow
-        const FrameResult result = tracker.process(core::viewOf(frame.bgr), frame.time_s);
+        const FrameResult result = tracker.process(tools::viewOf(frame.bgr), frame.time_s);
         trackerSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         out << frameJson(frames, frame.time_s, result, config.max_faces, raw).dump() << '\n';
         if (args.has("--overlay")) {

@@ -73,7 +73,7 @@ void AsyncTracker::Impl::read() {
     Clock::time_point start;
     double firstTime = 0.0;
     std::string error;
-    for (long number = 0;; ++number) {
+    for (long number = 0;;) {
         ImageView view;
         double time_s = 0.0;
         FrameSource::Status status;
@@ -84,7 +84,6 @@ void AsyncTracker::Impl::read() {
             break;
         }
         if (status == FrameSource::Status::Timeout) {
-            --number;
             std::lock_guard<std::mutex> lock(frame_mutex);
             if (stopping) break;
             continue;
@@ -108,7 +107,7 @@ void AsyncTracker::Impl::read() {
             error = e.what();
             break;
         }
-        pending.number = number;
+        pending.number = number++;
         pending.time_s = time_s;
         pending.arrival = Clock::now();
         has_pending = true;

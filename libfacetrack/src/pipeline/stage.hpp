@@ -28,7 +28,6 @@ struct FrameInput {
     ImageView colour;     ///< the caller's pixels, in the caller's PixelFormat
     const cv::Mat& gray;  ///< 8-bit grey, converted once per frame
     fit::Camera camera;   ///< the pinhole model for this frame's size
-    double time_s = 0.0;
     double dt = 0.0;      ///< seconds since the previous frame (> 0)
 };
 

@@ -118,7 +118,6 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
     // Time must increase; anything else (repeated, backwards, NaN) counts as one frame at 30 fps.
     const bool increasing = std::isfinite(time_s) && (!std::isfinite(last_time_) || time_s > last_time_);
     input.dt = increasing && std::isfinite(last_time_) ? time_s - last_time_ : 1.0 / 30.0;
-    input.time_s = time_s;
     if (increasing) last_time_ = time_s;
     const long frameIndex = frame_index_++;
     std::fill(ms_.begin(), ms_.end(), 0.0);
