@@ -160,6 +160,26 @@ TEST(AsyncTracker, AClipTrackedFrameByFrameDropsNothing) {
     EXPECT_FALSE(tracking.latest(latest));  // nothing newer
 }
 
+TEST(AsyncTracker, WaitForNewerHandsOverEveryResultOfAFrameByFrameClipThenTimesOut) {
+    FACETRACK_REQUIRE_SHARED();
+    const auto frames = clipFrames(40);
+    AsyncTracker tracking(Models::loadDefault(), {}, std::make_unique<FakeCamera>(frames, std::chrono::milliseconds(20), 40));
+    AsyncResult latest;
+    long received = 0, last = -1;
+    while (tracking.waitForNewer(latest, 2.0)) {
+        EXPECT_GT(latest.frame_number, last);
+        EXPECT_LE(latest.arrival, Clock::now());
+        last = latest.frame_number;
+        ++received;
+    }
+    EXPECT_TRUE(tracking.stats().finished);
+    EXPECT_EQ(last, 39);  // a frame every 20 ms, tracked in ~1 ms: none replaced before it was tracked
+    EXPECT_EQ(received, 40 - tracking.stats().frames_dropped);
+    const auto start = Clock::now();
+    EXPECT_FALSE(tracking.waitForNewer(latest, 5.0));  // finished: returns at once, not after 5 s
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 0.5);
+}
+
 TEST(AsyncTracker, StopsCleanlyMidStream) {
     FACETRACK_REQUIRE_SHARED();
     for (const bool destroy : {false, true}) {

@@ -274,6 +274,8 @@ TEST(TrackerApi, TakesTheApplicationsOwnDetector) {
     EXPECT_EQ(out.faces[0].box.y0, 2.f);
     EXPECT_EQ(out.camera.cx, 30.f);
     EXPECT_EQ(out.camera.cy, 20.f);
+    EXPECT_EQ(out.camera.width, 80);
+    EXPECT_EQ(out.camera.height, 60);
     config.camera.principal_x_px = std::nan("");
     EXPECT_THROW(Tracker(models, config, std::make_unique<FakeDetector>(&calls)), Error);
 }

@@ -15,6 +15,8 @@ packages=(
   nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
   # detector fallback (Haar cascades) and peers for evaluation (dlib's 68-point model)
   opencv-data libdlib-dev libdlib-data
+  # facetrack send: OSC encoding for the VMC protocol
+  liboscpack-dev
   # headless rendering for the demo's test, and video decoding
   xvfb xauth ffmpeg
 )

@@ -24,6 +24,7 @@
 #include "facetrack/result.hpp"
 #include "facetrack/tracker.hpp"
 
+#include <chrono>
 #include <memory>
 #include <string>
 
@@ -66,6 +67,9 @@ struct AsyncResult {
     long frame_number = -1;      ///< frames read from the source before this one (0 is the first)
     double time_s = 0.0;         ///< the frame's timestamp from the source
     double latency_ms = 0.0;     ///< from the frame's arrival (read returning) to its result being ready
+    /// When the frame arrived, for timing what the application does with the
+    /// result afterwards (a sender's capture-to-packet latency).
+    std::chrono::steady_clock::time_point arrival;
 };
 
 struct AsyncStats {
@@ -92,6 +96,10 @@ public:
     /// holds (by frame_number) and returns true; false when there is nothing
     /// newer. Never waits for tracking; reuses `out`'s memory.
     bool latest(AsyncResult& out) const;
+    /// latest(), waiting up to `timeout_s` for a newer result: for a consumer
+    /// thread that acts on every result (a network sender), not a render loop.
+    /// Returns false on timeout or once tracking has finished with nothing newer.
+    bool waitForNewer(AsyncResult& out, double timeout_s) const;
     AsyncStats stats() const;
     /// Stops reading and tracking; later calls do nothing. latest() keeps the last result.
     void stop();

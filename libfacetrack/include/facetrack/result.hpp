@@ -111,6 +111,7 @@ struct FaceResult {
 struct CameraIntrinsics {
     float fx = 0.f, fy = 0.f;
     float cx = 0.f, cy = 0.f;
+    int width = 0, height = 0;  ///< the frame's size in pixels
 };
 
 /// Wall-clock time one stage took on this frame, summed over faces.

@@ -7,6 +7,7 @@
 
 #include "facetrack/error.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
@@ -55,6 +56,7 @@ struct AsyncTracker::Impl {
 
     // Tracking -> the application.
     mutable std::mutex result_mutex;
+    mutable std::condition_variable result_ready;
     AsyncResult published, next;
     long frames_tracked = 0;
     double latency_sum_ms = 0.0;
@@ -141,20 +143,27 @@ void AsyncTracker::Impl::track() {
         }
         next.frame_number = working.number;
         next.time_s = working.time_s;
+        next.arrival = working.arrival;
         next.latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - working.arrival).count();
-        std::lock_guard<std::mutex> lock(result_mutex);
-        std::swap(published, next);
-        ++frames_tracked;
-        latency_sum_ms += published.latency_ms;
+        {
+            std::lock_guard<std::mutex> lock(result_mutex);
+            std::swap(published, next);
+            ++frames_tracked;
+            latency_sum_ms += published.latency_ms;
+        }
+        result_ready.notify_all();
     }
     {
         std::lock_guard<std::mutex> lock(frame_mutex);
         stopping = true;  // the reader stops too when tracking failed
     }
     frame_taken.notify_all();
-    std::lock_guard<std::mutex> lock(result_mutex);
-    track_error = error;
-    finished = true;
+    {
+        std::lock_guard<std::mutex> lock(result_mutex);
+        track_error = error;
+        finished = true;
+    }
+    result_ready.notify_all();
 }
 
 AsyncTracker::AsyncTracker(Models models, const TrackerConfig& config, std::unique_ptr<FrameSource> source,
@@ -181,6 +190,16 @@ void AsyncTracker::stop() {
 bool AsyncTracker::latest(AsyncResult& out) const {
     std::lock_guard<std::mutex> lock(impl_->result_mutex);
     if (impl_->published.frame_number < 0 || impl_->published.frame_number <= out.frame_number) return false;
+    out = impl_->published;
+    return true;
+}
+
+bool AsyncTracker::waitForNewer(AsyncResult& out, double timeout_s) const {
+    std::unique_lock<std::mutex> lock(impl_->result_mutex);
+    const auto newer = [&] { return impl_->published.frame_number > out.frame_number; };
+    impl_->result_ready.wait_for(lock, std::chrono::duration<double>(std::max(0.0, timeout_s)),
+                                 [&] { return newer() || impl_->finished; });
+    if (!newer()) return false;
     out = impl_->published;
     return true;
 }

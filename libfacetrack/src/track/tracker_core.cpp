@@ -114,7 +114,7 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
                                fit::cameraFor(frame.width, frame.height, c.horizontal_fov_deg, c.focal_length_px,
                                               c.principal_x_px, c.principal_y_px)};
     out.camera = {static_cast<float>(input.camera.fx), static_cast<float>(input.camera.fy),
-                  static_cast<float>(input.camera.cx), static_cast<float>(input.camera.cy)};
+                  static_cast<float>(input.camera.cx), static_cast<float>(input.camera.cy), frame.width, frame.height};
     // Time must increase; anything else (repeated, backwards, NaN) counts as one frame at 30 fps.
     const bool increasing = std::isfinite(time_s) && (!std::isfinite(last_time_) || time_s > last_time_);
     input.dt = increasing && std::isfinite(last_time_) ? time_s - last_time_ : 1.0 / 30.0;

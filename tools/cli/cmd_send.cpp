@@ -1,0 +1,126 @@
+// facetrack send: track a camera or a clip and stream the results to an avatar
+// app over VMC, iFacialMocap or OpenSeeFace (docs/protocols.md, docs/embedding.md).
+
+#include "commands.hpp"
+
+#include "send/sender.hpp"
+
+#include "facetrack/async_tracker.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+
+namespace facetrack::cli {
+
+namespace {
+
+const char* kUsage = R"(usage: facetrack send (--camera /dev/videoN | --input CLIP|DIR) --protocol vmc|ifacialmocap|openseeface
+                      [--to HOST[:PORT]] [--listen-port P] [--frames N] [--fast]
+                      [--size WxH] [--fps F] [tracker options]
+Tracks on its own thread and sends every tracked frame to an avatar app over UDP:
+  vmc            VMC protocol (OSC): Perfect Sync and VRM blend shapes, Head/Neck/eye bones
+                 (VSeeFace, VNyan, Warudo, VMagicMirror, EVMC4U; default port 39539)
+  ifacialmocap   iFacialMocap's text protocol (default port 49983); answers a receiver's
+                 handshake heard on --listen-port (default 49983)
+  openseeface    OpenSeeFace's 1785-byte binary packet per face (default port 11573)
+--to defaults to 127.0.0.1 on the protocol's port. A clip plays at its own rate, dropping
+frames the tracker is too slow for, as a camera would; --fast tracks every frame as fast as
+possible. --size and --fps are what the camera is asked for (default 640x480, 30).
+Sending never waits on the network: a receiver that is not there costs nothing. Ctrl+C
+stops; at the end it prints frames, datagrams, capture-to-sent latency and CPU use.
+docs/embedding.md says how to set up each app.)";
+
+volatile std::sig_atomic_t g_interrupted = 0;
+void onInterrupt(int) { g_interrupted = 1; }
+
+double percentile(std::vector<double> v, double q) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
+}
+
+double cpuSeconds() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+std::unique_ptr<FrameSource> openSource(const Args& args) {
+    if (args.has("--camera") == args.has("--input")) throw Error("give --camera DEVICE or --input CLIP (see --help)");
+    if (args.has("--input")) return openMediaSource(args.get("--input"));
+    CaptureSettings settings;
+    settings.device = args.get("--camera");
+    if (args.has("--size")) {
+        const cv::Size size = parseSize(args.get("--size"));
+        settings.width = size.width;
+        settings.height = size.height;
+    }
+    settings.fps = args.number("--fps", settings.fps);
+    return openCameraSource(settings);
+}
+
+}  // namespace
+
+int runSend(const std::vector<std::string>& argv) {
+    const Args args(argv, trackingOptions({"--camera", "--input", "--protocol", "--to", "--listen-port", "--frames", "--size", "--fps"}),
+                    {"--help", "--no-filter", "--fast"});
+    if (args.has("--help")) {
+        std::puts(kUsage);
+        return 0;
+    }
+    if (!args.positional().empty()) throw Error("unexpected '" + args.positional()[0] + "' (see --help)");
+    if (!args.has("--protocol")) throw Error("give --protocol vmc|ifacialmocap|openseeface");
+    const send::Protocol protocol = send::parseProtocol(args.get("--protocol"));
+    const long maxFrames = static_cast<long>(args.number("--frames", -1));
+    std::optional<int> listenPort;
+    if (args.has("--listen-port")) listenPort = static_cast<int>(args.number("--listen-port", 0));
+
+    Models models = Models::loadDefault();
+    send::Sender sender(protocol, args.get("--to", "127.0.0.1"), models.face, listenPort);
+    AsyncOptions options;
+    options.realtime = !args.has("--fast");
+    auto source = openSource(args);
+    const std::string sourceName = source->describe();
+    AsyncTracker tracking(std::move(models), trackerConfig(args), std::move(source), options);
+    std::fprintf(stderr, "facetrack send: %s from %s to %s (Ctrl+C stops)\n", send::protocolName(protocol), sourceName.c_str(),
+                 sender.destination().c_str());
+
+    std::signal(SIGINT, onInterrupt);
+    std::signal(SIGTERM, onInterrupt);
+    const auto start = std::chrono::steady_clock::now();
+    const double cpuStart = cpuSeconds();
+    AsyncResult latest;
+    std::vector<double> latencyMs;
+    long withFace = 0;
+    while (!g_interrupted && (maxFrames < 0 || sender.stats().frames < maxFrames)) {
+        if (!tracking.waitForNewer(latest, 0.2)) {
+            if (tracking.stats().finished) break;
+            continue;
+        }
+        sender.send(latest.result, latest.time_s);
+        latencyMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - latest.arrival).count());
+        withFace += latest.result.faces.empty() ? 0 : 1;
+    }
+    tracking.stop();
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const AsyncStats t = tracking.stats();
+    const send::SenderStats& s = sender.stats();
+    std::fprintf(stderr,
+                 "facetrack send: %ld frames sent (a face in %ld) in %.1f s, %ld datagrams, %ld bytes, %ld not sent; "
+                 "read %ld, dropped %ld; capture to sent p50 %.2f ms, p99 %.2f ms; CPU %.0f %% of one core\n",
+                 s.frames, withFace, wall, s.datagrams, s.bytes, s.failed, t.frames_read, t.frames_dropped,
+                 percentile(latencyMs, 0.5), percentile(latencyMs, 0.99), wall > 0 ? 100.0 * (cpuSeconds() - cpuStart) / wall : 0.0);
+    if (!t.error.empty()) throw Error(t.error);
+    return 0;
+}
+
+}  // namespace facetrack::cli
