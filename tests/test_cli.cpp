@@ -68,7 +68,17 @@ TEST(Cli, TrackOnAClipNumbersFramesAndGivesLandmarks) {
         EXPECT_EQ(lines[i]["frame"], i);
         EXPECT_NEAR(lines[i]["time_s"].get<double>(), i / 30.0, 0.01);
         EXPECT_TRUE(lines[i]["tracked"].get<bool>());
-        EXPECT_TRUE(lines[i]["gaze"].is_null());  // stage not built yet
+        if (std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) {
+            for (const char* eye : {"left", "right"}) {
+                const auto& g = lines[i]["gaze"][eye];
+                EXPECT_EQ(g["vector"].size(), 3u);
+                EXPECT_EQ(g["vector_head"].size(), 3u);
+                EXPECT_EQ(g["pupil"].size(), 2u);
+                EXPECT_GE(g["openness"].get<double>(), 0.0);
+                EXPECT_LE(g["openness"].get<double>(), 1.0);
+                EXPECT_LT(std::fabs(g["yaw_deg"].get<double>()), 60.0);
+            }
+        }
         EXPECT_FALSE(lines[i].contains("faces"));  // only with --max-faces > 1
         if (std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm")) {
             EXPECT_EQ(lines[i]["landmarks"].size(), 68u);

@@ -19,7 +19,7 @@ namespace {
 /// The shipped face model, without a landmark model: the landmarks stage is off.
 Models faceOnly() {
     static const auto model = FaceModel::load(test::shippedFaceModel());
-    return Models{model, nullptr};
+    return Models{model, nullptr, nullptr};
 }
 
 using test::clipFrames;
@@ -159,7 +159,17 @@ TEST(Tracker, DetectsOnceThenFollowsWithLandmarksPoseAndExpression) {
         const FaceResult& face = result.faces[0];
         ASSERT_TRUE(face.landmarks && face.pose && face.expression && face.fit_residual);
         ASSERT_TRUE(face.raw.landmarks && face.raw.pose && face.raw.expression);
-        EXPECT_FALSE(face.gaze.has_value());
+        ASSERT_TRUE(face.gaze.has_value());
+        for (const EyeGaze* g : {&face.gaze->left, &face.gaze->right}) {
+            EXPECT_NEAR(std::hypot(g->direction.x, g->direction.y, g->direction.z), 1.f, 1e-4f);
+            EXPECT_GE(g->openness, 0.f);
+            EXPECT_LE(g->openness, 1.f);
+        }
+        // The pupils between their eye's corners (the subject's right eye on the image's left).
+        EXPECT_GT(face.gaze->right.pupil_px.x, (*face.landmarks)[36].x);
+        EXPECT_LT(face.gaze->right.pupil_px.x, (*face.landmarks)[39].x);
+        EXPECT_GT(face.gaze->left.pupil_px.x, (*face.landmarks)[42].x);
+        EXPECT_LT(face.gaze->left.pupil_px.x, (*face.landmarks)[45].x);
         EXPECT_EQ(face.tracked, i > 0);
         if (i == 0) id = face.id;
         EXPECT_EQ(face.id, id);

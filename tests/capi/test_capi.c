@@ -87,7 +87,14 @@ int main(void) {
             ft_face face;
             face.struct_size = sizeof face;
             CHECK(ft_tracker_face(tracker, 0, &face) == FT_OK);
-            CHECK(face.has_landmarks && face.has_pose && face.has_expression && !face.has_gaze);
+            CHECK(face.has_landmarks && face.has_pose && face.has_expression && face.has_gaze);
+            CHECK(fabsf(face.gaze_left[0] * face.gaze_left[0] + face.gaze_left[1] * face.gaze_left[1] +
+                        face.gaze_left[2] * face.gaze_left[2] - 1.f) < 1e-4f);
+            CHECK(face.openness_left >= 0.f && face.openness_left <= 1.f && face.openness_right >= 0.f && face.openness_right <= 1.f);
+            CHECK(fabsf(face.gaze_yaw_pitch_right[0]) < 60.f && fabsf(face.gaze_yaw_pitch_right[1]) < 50.f);
+            /* The pupils lie between the eyes' corners: the right eye on the image's left. */
+            CHECK(face.pupil_right[0] > face.landmarks[2 * 36] && face.pupil_right[0] < face.landmarks[2 * 39]);
+            CHECK(face.pupil_left[0] > face.landmarks[2 * 42] && face.pupil_left[0] < face.landmarks[2 * 45]);
             CHECK(face.tracked == (frames > 0));
             CHECK(face.translation_mm[2] > 200.f && face.translation_mm[2] < 2000.f);
             CHECK(fabsf(face.camera_from_model[14] - face.translation_mm[2]) < 1e-3f);

@@ -34,7 +34,9 @@ class Face(ctypes.Structure):
                 ("has_gaze", ctypes.c_int32), ("gaze_left", ctypes.c_float * 3), ("gaze_right", ctypes.c_float * 3),
                 ("openness_left", ctypes.c_float), ("openness_right", ctypes.c_float),
                 ("has_fit_residual", ctypes.c_int32), ("fit_residual", ctypes.c_float),
-                ("identity_calibrated", ctypes.c_int32)]
+                ("identity_calibrated", ctypes.c_int32),
+                ("gaze_yaw_pitch_left", ctypes.c_float * 2), ("gaze_yaw_pitch_right", ctypes.c_float * 2),
+                ("pupil_left", ctypes.c_float * 2), ("pupil_right", ctypes.c_float * 2)]
 
 
 def frames():

@@ -79,6 +79,12 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result, const std::v
                     cv::line(bgr, fixedPoint(projector.project(from)), fixedPoint(projector.project(to)),
                              cv::Scalar(255, 255, 0), 2, cv::LINE_AA, kShift);
                 }
+                // Pupils: a ring, filled while the eye is open.
+                for (const EyeGaze* g : gaze) {
+                    const int thickness = g->openness > 0.5f ? -1 : 1;
+                    cv::circle(bgr, fixedPoint({g->pupil_px.x, g->pupil_px.y}), 3 << kShift, cv::Scalar(255, 0, 255), thickness,
+                               cv::LINE_AA, kShift);
+                }
             }
         }
         if (face.landmarks) {

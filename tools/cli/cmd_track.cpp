@@ -69,8 +69,12 @@ Json faceJson(const FaceResult& face, bool raw) {
               {"identity_calibrated", face.identity_calibrated}};
     if (face.gaze) {
         auto eye = [](const EyeGaze& e) {
-            return Json{{"direction", vec3(e.direction)}, {"yaw_deg", e.yaw_deg},
-                        {"pitch_deg", e.pitch_deg}, {"openness", e.openness}};
+            return Json{{"vector", vec3(e.direction)},
+                        {"vector_head", vec3(e.direction_head)},
+                        {"yaw_deg", round2(e.yaw_deg)},
+                        {"pitch_deg", round2(e.pitch_deg)},
+                        {"openness", round2(e.openness)},
+                        {"pupil", {round2(e.pupil_px.x), round2(e.pupil_px.y)}}};
         };
         j["gaze"] = {{"left", eye(face.gaze->left)}, {"right", eye(face.gaze->right)}};
     }

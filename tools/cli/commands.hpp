@@ -21,6 +21,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv);
 int runBench(const std::vector<std::string>& argv);
 int runEvalTrack(const std::vector<std::string>& argv);
 int runSend(const std::vector<std::string>& argv);
+int runEvalGaze(const std::vector<std::string>& argv);
 
 // The tools' shared pieces, by their short names.
 using tools::Args;

@@ -115,6 +115,10 @@ typedef struct ft_face {
     int32_t has_fit_residual;
     float fit_residual;
     int32_t identity_calibrated;
+    /* Added in ABI 1 after the first release of this struct: older callers'
+       struct_size ends before them and they are not written. */
+    float gaze_yaw_pitch_left[2], gaze_yaw_pitch_right[2]; /* degrees, head frame (docs/gaze.md) */
+    float pupil_left[2], pupil_right[2];                   /* iris centres, pixels */
 } ft_face;
 
 /** The library's ABI version (compare with FT_ABI_VERSION) and version string. */

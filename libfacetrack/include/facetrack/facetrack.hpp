@@ -8,6 +8,7 @@
 #include "facetrack/capture.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
+#include "facetrack/eye_model.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/geometry.hpp"
 #include "facetrack/image.hpp"

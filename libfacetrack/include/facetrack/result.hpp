@@ -62,11 +62,15 @@ struct ExpressionResult {
     std::vector<float> native;
 };
 
+/// One eye's gaze (the gaze stage, docs/gaze.md). Yaw and pitch are in the
+/// head's frame: 0, 0 looks straight out of the face.
 struct EyeGaze {
-    Vec3 direction;       ///< unit vector in the camera frame, from the eyeball centre
-    float yaw_deg = 0.f;  ///< > 0: looking to the image's right
-    float pitch_deg = 0.f;///< > 0: looking up
-    float openness = 0.f; ///< 0 closed .. 1 fully open
+    Vec3 direction;        ///< unit vector in the camera frame, from the eyeball centre
+    Vec3 direction_head;   ///< the same in the model (head) frame
+    float yaw_deg = 0.f;   ///< > 0: towards the subject's left (the image's right for a face looking at the camera)
+    float pitch_deg = 0.f; ///< > 0: up
+    float openness = 0.f;  ///< 0 closed .. 1 open (the lid aperture over this face's open-eye aperture)
+    Point2 pupil_px;       ///< the iris centre in the frame, pixels
 };
 
 struct GazeResult {

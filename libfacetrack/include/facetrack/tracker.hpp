@@ -11,6 +11,7 @@
 /// is used by one thread at a time; run one Tracker per stream or per thread.
 
 #include "facetrack/detector.hpp"
+#include "facetrack/eye_model.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/image.hpp"
 #include "facetrack/landmark_model.hpp"
@@ -34,9 +35,10 @@ struct StageInfo {
 struct Models {
     std::shared_ptr<const FaceModel> face;            ///< required
     std::shared_ptr<const LandmarkModel> landmarks;   ///< null: the landmarks stage is not available
+    std::shared_ptr<const EyeModel> eyes;             ///< null: the gaze stage is not available
 
-    /// The shipped models from modelDirectory(). A missing landmark model
-    /// leaves `landmarks` null (and is logged); any other problem throws Error.
+    /// The shipped models from modelDirectory(). A missing landmark or eye
+    /// model leaves its pointer null (and is logged); any other problem throws Error.
     static Models loadDefault();
 };
 

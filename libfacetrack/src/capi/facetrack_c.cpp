@@ -213,6 +213,10 @@ ft_status ft_tracker_face(const ft_tracker* tracker, int32_t index, ft_face* fac
         copyVec3(f.gaze->right.direction, full.gaze_right);
         full.openness_left = f.gaze->left.openness;
         full.openness_right = f.gaze->right.openness;
+        full.gaze_yaw_pitch_left[0] = f.gaze->left.yaw_deg, full.gaze_yaw_pitch_left[1] = f.gaze->left.pitch_deg;
+        full.gaze_yaw_pitch_right[0] = f.gaze->right.yaw_deg, full.gaze_yaw_pitch_right[1] = f.gaze->right.pitch_deg;
+        full.pupil_left[0] = f.gaze->left.pupil_px.x, full.pupil_left[1] = f.gaze->left.pupil_px.y;
+        full.pupil_right[0] = f.gaze->right.pupil_px.x, full.pupil_right[1] = f.gaze->right.pupil_px.y;
     }
     if (f.fit_residual) {
         full.has_fit_residual = 1;

@@ -24,8 +24,8 @@ struct FilterFaceState final : pipeline::StageState {
 
 class FilterStage final : public pipeline::Stage {
 public:
-    FilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config)
-        : model_(std::move(model)), config_(config) {}
+    FilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config, std::vector<int> passThrough)
+        : model_(std::move(model)), config_(config), pass_through_(std::move(passThrough)) {}
 
     StageInfo info() const override {
         if (!config_.enabled) return {"filter", false, "off (TrackerConfig::filter.enabled)"};
@@ -76,17 +76,22 @@ private:
         for (std::size_t k = 0; k < e.native.size(); ++k) s.expression_sample[k] = e.native[k];
         const Eigen::VectorXd& smooth = s.expression(s.expression_sample, dt, 1.0);
         for (std::size_t k = 0; k < e.native.size(); ++k) e.native[k] = static_cast<float>(std::clamp(smooth[k], 0.0, 1.0));
+        for (const int k : pass_through_) {
+            if (static_cast<std::size_t>(k) < e.native.size()) e.native[static_cast<std::size_t>(k)] = static_cast<float>(s.expression_sample[k]);
+        }
         e.arkit = model_->toArkit(e.native);
     }
 
     std::shared_ptr<const FaceModel> model_;
     FilterConfig config_;
+    std::vector<int> pass_through_;
 };
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeFilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config) {
-    return std::make_unique<FilterStage>(std::move(model), config);
+std::unique_ptr<pipeline::Stage> makeFilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config,
+                                                 std::vector<int> passThrough) {
+    return std::make_unique<FilterStage>(std::move(model), config, std::move(passThrough));
 }
 
 }  // namespace facetrack::filter

@@ -12,10 +12,15 @@
 #include "facetrack/tracker.hpp"
 
 #include <memory>
+#include <vector>
 
 namespace facetrack::filter {
 
-/// `model` converts the filtered native weights to ARKit.
-std::unique_ptr<pipeline::Stage> makeFilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config);
+/// `model` converts the filtered native weights to ARKit. `passThrough`: native
+/// expression indices left unfiltered, for a stage that does its own temporal
+/// estimation (the gaze stage's eye shapes: a blink lasts 3-4 frames, and the
+/// 1-euro filter would halve it).
+std::unique_ptr<pipeline::Stage> makeFilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config,
+                                                 std::vector<int> passThrough = {});
 
 }  // namespace facetrack::filter

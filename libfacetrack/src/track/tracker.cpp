@@ -5,6 +5,7 @@
 #include "filter/filter_stage.hpp"
 #include "fit/camera.hpp"
 #include "fit/fit_stage.hpp"
+#include "gaze/gaze_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
 #include "track/tracker_core.hpp"
 
@@ -21,6 +22,12 @@ Models Models::loadDefault() {
         models.landmarks = LandmarkModel::load(lbf);
     } else {
         core::log("landmark model " + lbf + " not found: the landmarks stage is not available");
+    }
+    const std::string eyes = EyeModel::defaultPath();
+    if (std::filesystem::exists(eyes, ec)) {
+        models.eyes = EyeModel::load(eyes);
+    } else {
+        core::log("eye model " + eyes + " not found: the gaze stage is not available");
     }
     return models;
 }
@@ -49,8 +56,10 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind()));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames}, models.landmarks != nullptr));
     stages.push_back(pipeline::notAvailable("cnn", "the CNN refinement cascade is not built yet"));
-    stages.push_back(pipeline::notAvailable("gaze", "eye gaze is not built yet"));
-    stages.push_back(filter::makeFilterStage(models.face, config.filter));
+    const bool gaze = models.eyes && models.landmarks;
+    stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
+    stages.push_back(filter::makeFilterStage(models.face, config.filter,
+                                             gaze ? gaze::gazeExpressions(*models.face) : std::vector<int>{}));
     return stages;
 }
 

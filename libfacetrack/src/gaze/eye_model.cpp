@@ -1,0 +1,88 @@
+#include "facetrack/eye_model.hpp"
+
+#include "core/binary_io.hpp"
+#include "facetrack/version.hpp"
+#include "gaze/eye_model_data.hpp"
+
+#include <cmath>
+#include <string_view>
+
+namespace facetrack {
+
+namespace gaze {
+
+namespace {
+void putForest(core::BinaryWriter& w, const PatchForest& f) {
+    w.put<std::int32_t>(f.depth);
+    w.put<std::int32_t>(f.outputs);
+    w.putVector(f.splits);
+    w.putVector(f.leaves);
+}
+
+PatchForest getForest(core::BinaryReader& r) {
+    PatchForest f;
+    f.depth = r.get<std::int32_t>();
+    f.outputs = r.get<std::int32_t>();
+    if (f.depth < 1 || f.depth > 16 || f.outputs < 1 || f.outputs > 16) r.fail("forest sizes");
+    f.splits = r.getVector<PatchFeature>();
+    f.leaves = r.getVector<float>();
+    return f;
+}
+
+void validate(const EyeModelData& m, const std::string& what) {
+    m.pixels.validate(what.c_str());
+    m.aperture.validate(what.c_str());
+    if (m.pixels.outputs != kPixelClasses || m.aperture.outputs != 1) throw Error(what + ": corrupt: forest outputs");
+    if (!(m.open_aperture > 0.f && m.open_aperture < 2.f && m.closed_aperture >= 0.f && m.closed_aperture < m.open_aperture))
+        throw Error(what + ": corrupt: open or closed aperture");
+}
+}  // namespace
+
+void writeEyeModel(const std::string& path, const EyeModelData& m) {
+    validate(m, "eye model for '" + path + "'");
+    core::BinaryWriter w;
+    putForest(w, m.pixels);
+    putForest(w, m.aperture);
+    w.put(m.open_aperture);
+    w.put(m.closed_aperture);
+    w.putString(m.provenance);
+    core::writeModelFile(path, kEyeModelMagic, kEyeModelVersion, w.bytes());
+}
+
+EyeModelData readEyeModel(const std::string& path) {
+    const std::string what = "eye model '" + path + "'";
+    const std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
+    core::BinaryReader r(payload, what);
+    EyeModelData m;
+    m.pixels = getForest(r);
+    m.aperture = getForest(r);
+    m.open_aperture = r.get<float>();
+    m.closed_aperture = r.get<float>();
+    m.provenance = r.getString();
+    r.expectEnd();
+    validate(m, what);
+    return m;
+}
+
+}  // namespace gaze
+
+EyeModel::EyeModel(std::shared_ptr<const gaze::EyeModelData> data, std::string source)
+    : data_(std::move(data)), source_(std::move(source)) {
+    if (!data_) throw Error("EyeModel: null model data");
+}
+
+std::shared_ptr<const EyeModel> EyeModel::load(const std::string& path) {
+    return std::make_shared<const EyeModel>(std::make_shared<const gaze::EyeModelData>(gaze::readEyeModel(path)), path);
+}
+
+std::shared_ptr<const EyeModel> EyeModel::loadDefault() { return load(defaultPath()); }
+
+std::string EyeModel::defaultPath() { return modelDirectory() + "/eye_model.ftm"; }
+
+std::uint32_t EyeModel::formatVersion() { return gaze::kEyeModelVersion; }
+
+const std::string& EyeModel::sourcePath() const { return source_; }
+
+const std::string& EyeModel::provenance() const { return data_->provenance; }
+
+}  // namespace facetrack

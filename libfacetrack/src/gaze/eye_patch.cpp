@@ -1,0 +1,76 @@
+#include "gaze/eye_patch.hpp"
+
+
+#include <algorithm>
+#include <cmath>
+
+namespace facetrack::gaze {
+
+int outerCorner(Eye eye) { return eye == Eye::Left ? 45 : 36; }
+int innerCorner(Eye eye) { return eye == Eye::Left ? 42 : 39; }
+
+bool cutEyePatch(const cv::Mat& gray, const Landmarks68& landmarks, Eye eye, EyePatch& out) {
+    return cutEyePatch(gray, landmarks[static_cast<std::size_t>(outerCorner(eye))],
+                       landmarks[static_cast<std::size_t>(innerCorner(eye))], eye == Eye::Left, out);
+}
+
+bool cutEyePatch(const cv::Mat& gray, Point2 outer, Point2 inner, bool mirror, EyePatch& out) {
+    const float dx = inner.x - outer.x, dy = inner.y - outer.y;
+    const float length = std::hypot(dx, dy);
+    if (!std::isfinite(length) || length < 2.f || gray.empty()) return false;
+    // Patch = s R M (image - outer) + (kOuterX, kCornerY), M = diag(-1, 1) when mirrored.
+    const float m = mirror ? -1.f : 1.f;
+    const float ux = m * dx / length, uy = dy / length;  // the corner axis after mirroring
+    const float s = kEyeWidth / length;
+    // Rotation taking (ux, uy) to (1, 0): [ux uy; -uy ux].
+    const cv::Matx22f a(s * ux * m, s * uy, -s * uy * m, s * ux);
+    const cv::Vec2f t = cv::Vec2f(kOuterX, kCornerY) - a * cv::Vec2f(outer.x, outer.y);
+    out.patch_from_image = cv::Matx23f(a(0, 0), a(0, 1), t[0], a(1, 0), a(1, 1), t[1]);
+    const cv::Matx22f inverse = a.inv();
+    const cv::Vec2f back = -(inverse * t);
+    out.image_from_patch = cv::Matx23f(inverse(0, 0), inverse(0, 1), back[0], inverse(1, 0), inverse(1, 1), back[1]);
+    out.image_px_per_patch_px = 1.f / s;
+    out.mirrored = mirror;
+
+    // Bilinear sampling, the border repeated; by hand: OpenCV's warpAffine
+    // and meanStdDev allocate scratch memory on every call.
+    out.pixels.create(kPatchHeight, kPatchWidth, CV_32F);
+    const cv::Matx23f& back_map = out.image_from_patch;
+    const int w = gray.cols, h = gray.rows;
+    double sum = 0.0, sumSquares = 0.0;
+    for (int y = 0; y < kPatchHeight; ++y) {
+        float* row = out.pixels.ptr<float>(y);
+        for (int x = 0; x < kPatchWidth; ++x) {
+            const float sx = back_map(0, 0) * x + back_map(0, 1) * y + back_map(0, 2);
+            const float sy = back_map(1, 0) * x + back_map(1, 1) * y + back_map(1, 2);
+            const float fx = std::floor(sx), fy = std::floor(sy);
+            const float ax = sx - fx, ay = sy - fy;
+            const int x0 = std::clamp(static_cast<int>(fx), 0, w - 1), x1 = std::clamp(static_cast<int>(fx) + 1, 0, w - 1);
+            const int y0 = std::clamp(static_cast<int>(fy), 0, h - 1), y1 = std::clamp(static_cast<int>(fy) + 1, 0, h - 1);
+            const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0);
+            const std::uint8_t* r1 = gray.ptr<std::uint8_t>(y1);
+            const float v = (1.f - ay) * ((1.f - ax) * r0[x0] + ax * r0[x1]) + ay * ((1.f - ax) * r1[x0] + ax * r1[x1]);
+            row[x] = v;
+            sum += v;
+            sumSquares += static_cast<double>(v) * v;
+        }
+    }
+    const double count = static_cast<double>(kPatchWidth * kPatchHeight);
+    const double mean = sum / count;
+    // A flat patch (a covered eye) keeps a floor on the deviation: noise is not amplified into texture.
+    const double deviation = std::max(std::sqrt(std::max(0.0, sumSquares / count - mean * mean)), 4.0);
+    out.pixels.convertTo(out.pixels, CV_32F, 1.0 / deviation, -mean / deviation);
+    return true;
+}
+
+Point2 toPatch(const EyePatch& p, Point2 image) {
+    const cv::Matx23f& a = p.patch_from_image;
+    return {a(0, 0) * image.x + a(0, 1) * image.y + a(0, 2), a(1, 0) * image.x + a(1, 1) * image.y + a(1, 2)};
+}
+
+Point2 toImage(const EyePatch& p, Point2 q) {
+    const cv::Matx23f& a = p.image_from_patch;
+    return {a(0, 0) * q.x + a(0, 1) * q.y + a(0, 2), a(1, 0) * q.x + a(1, 1) * q.y + a(1, 2)};
+}
+
+}  // namespace facetrack::gaze

@@ -1,0 +1,218 @@
+#include "gaze/gaze_stage.hpp"
+
+#include "gaze/eye_model_data.hpp"
+#include "gaze/eye_patch.hpp"
+#include "gaze/gaze_fit.hpp"
+
+#include "facetrack/posed_mesh.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace facetrack::gaze {
+
+float blinkWeight(float openness) { return std::clamp((0.8f - openness) / 0.55f, 0.f, 1.f); }
+float wideWeight(float ratio) { return std::clamp((ratio - 1.1f) / 0.3f, 0.f, 1.f); }
+
+namespace {
+
+constexpr float kDeg = 3.14159265358979f / 180.f;
+constexpr int kRegionW = kClassifiedRegion.x1 - kClassifiedRegion.x0;
+constexpr int kRegionH = kClassifiedRegion.y1 - kClassifiedRegion.y0;
+/// The open-eye reference: a running 70th percentile of the aperture, moved by this much a frame.
+constexpr float kReferenceQuantile = 0.7f;
+constexpr float kReferenceStep = 0.002f;
+
+struct EyeState {
+    EyePatch patch;
+    // Not brace-initialised: cv::Mat{a, b, c} is an initializer-list matrix of three values.
+    cv::Mat iris = cv::Mat(kRegionH, kRegionW, CV_32F), open = cv::Mat(kRegionH, kRegionW, CV_32F);
+    float reference = 0.f;  // the face's open-eye aperture
+};
+
+struct GazeFaceState final : pipeline::StageState {
+    std::array<EyeState, 2> eyes;  // the subject's left, right
+    GazeAngles angles{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
+    bool have_angles = false;
+    std::vector<float> centres_identity;  // the identity the eyeball centres were computed for
+    bool have_centres = false;
+    std::array<Vec3, 2> centres;
+    std::vector<Vec3> mesh;
+};
+
+/// Indices of the face model's eye shapes (-1 when it has no such shape).
+struct EyeShapes {
+    int blink, lookUp, lookDown, lookIn, lookOut, wide;
+};
+
+std::array<EyeShapes, 2> eyeShapes(const FaceModel& face) {
+    const auto& names = face.expressionNames();
+    const auto index = [&](const std::string& n) {
+        const auto it = std::find(names.begin(), names.end(), n);
+        return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+    };
+    std::array<EyeShapes, 2> shapes;
+    for (int e = 0; e < 2; ++e) {
+        const std::string s = e == 0 ? "_L" : "_R";
+        shapes[e] = {index("eyeBlink" + s), index("eyeLookUp" + s), index("eyeLookDown" + s),
+                     index("eyeLookIn" + s),  index("eyeLookOut" + s), index("eyeWide" + s)};
+    }
+    return shapes;
+}
+
+class GazeStage final : public pipeline::Stage {
+public:
+    GazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face)
+        : eyes_(std::move(eyes)), face_(std::move(face)), rigs_(EyeRig::both(*face_)), shapes_(eyeShapes(*face_)) {}
+
+    StageInfo info() const override {
+        return {"gaze", true, "eye patches, pixel and aperture forests, binocular MAP fit (" + eyes_->sourcePath() + ")"};
+    }
+
+    std::unique_ptr<pipeline::StageState> newFaceState() const override {
+        auto s = std::make_unique<GazeFaceState>();
+        for (auto& e : s->eyes) e.reference = eyes_->data().open_aperture;
+        return s;
+    }
+
+    void resetCalibration(pipeline::StageState* state) const override {
+        auto& s = static_cast<GazeFaceState&>(*state);
+        for (auto& e : s.eyes) e.reference = eyes_->data().open_aperture;
+        s.have_centres = false;
+    }
+
+    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        FaceResult& r = face.result;
+        auto& s = static_cast<GazeFaceState&>(*state);
+        if (!r.landmarks || !r.pose) {
+            r.gaze.reset();
+            return true;
+        }
+        updateCentres(r, s);
+        const HeadPose& pose = *r.pose;
+        const Eigen::Quaternionf q(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+        const Eigen::Matrix3f R = q.normalized().toRotationMatrix();
+        const Eigen::Vector3f t(pose.translation_mm.x, pose.translation_mm.y, pose.translation_mm.z);
+
+        const EyeModelData& model = eyes_->data();
+        std::array<EyeObservation, 2> seen;
+        std::array<float, 2> ratio{}, openness{};
+        for (int e = 0; e < 2; ++e) {
+            EyeState& eye = s.eyes[static_cast<std::size_t>(e)];
+            seen[e].centre = R * Eigen::Vector3f(s.centres[e].x, s.centres[e].y, s.centres[e].z) + t;
+            if (!cutEyePatch(frame.gray, *r.landmarks, e == 0 ? Eye::Left : Eye::Right, eye.patch)) continue;
+            classify(model, eye);
+            float aperture = 0.f;
+            model.aperture.evaluate(eye.patch.pixels, 0, 0, &aperture);
+            // Looking down lowers the upper lid: the reference follows the (held) gaze pitch.
+            const float pitch = std::min(0.f, s.angles[static_cast<std::size_t>(e)].y()) / kDeg;
+            const float closed = model.closed_aperture;
+            const float expected = closed + (eye.reference - closed) * std::max(0.55f, 1.f + 0.012f * pitch);
+            ratio[e] = (aperture - closed) / std::max(expected - closed, 1e-3f);
+            openness[e] = std::clamp(ratio[e], 0.f, 1.f);
+            // The reference tracks this face's open-eye aperture (a quantile, robust to blinks).
+            eye.reference += kReferenceStep * (aperture > eye.reference ? kReferenceQuantile : kReferenceQuantile - 1.f);
+            eye.reference = std::clamp(eye.reference, closed + 0.6f * (model.open_aperture - closed),
+                                       closed + 1.6f * (model.open_aperture - closed));
+            seen[e].patch = &eye.patch;
+            seen[e].iris = &eye.iris;
+            seen[e].open = &eye.open;
+            seen[e].weight = std::clamp((openness[e] - 0.35f) / 0.3f, 0.f, 1.f);
+        }
+        const fit::Camera& camera = frame.camera;
+        s.angles = fitGaze(seen, R, camera, s.angles, s.have_angles);
+        s.have_angles = true;
+
+        GazeResult gaze;
+        for (int e = 0; e < 2; ++e) {
+            EyeGaze& out = e == 0 ? gaze.left : gaze.right;
+            const Eigen::Vector2f a = s.angles[static_cast<std::size_t>(e)];
+            const Eigen::Vector3f head = gazeDirection(a.x(), a.y());
+            const Eigen::Vector3f cam = R * head;
+            out.direction = {cam.x(), cam.y(), cam.z()};
+            out.direction_head = {head.x(), head.y(), head.z()};
+            out.yaw_deg = a.x() / kDeg;
+            out.pitch_deg = a.y() / kDeg;
+            out.openness = openness[e];
+            const Eigen::Vector2f pupil = irisCentreInImage(seen[e].centre, R, camera, a);
+            out.pupil_px = {pupil.x(), pupil.y()};
+        }
+        r.gaze = gaze;
+        writeEyeShapes(r, gaze, ratio);
+        return true;
+    }
+
+private:
+    void classify(const EyeModelData& model, EyeState& eye) const {
+        float p[kPixelClasses];
+        for (int y = 0; y < kRegionH; ++y) {
+            float* iris = eye.iris.ptr<float>(y);
+            float* open = eye.open.ptr<float>(y);
+            for (int x = 0; x < kRegionW; ++x) {
+                model.pixels.evaluate(eye.patch.pixels, x + kClassifiedRegion.x0, y + kClassifiedRegion.y0, p);
+                iris[x] = p[kIris];
+                open[x] = p[kIris] + p[kSclera];
+            }
+        }
+    }
+
+    /// The eyeball centres of this face's identity (once per identity: a mesh evaluation).
+    void updateCentres(const FaceResult& r, GazeFaceState& s) const {
+        if (s.have_centres && s.centres_identity == r.identity) return;
+        face_->vertices(r.identity, {}, s.mesh);
+        for (int e = 0; e < 2; ++e) {
+            const Eigen::Vector3f c = rotationCentre(e == 0 ? face_->leftEyeball() : face_->rightEyeball(), rigs_[e].centre(s.mesh));
+            s.centres[e] = {c.x(), c.y(), c.z()};
+        }
+        s.centres_identity = r.identity;
+        s.have_centres = true;
+    }
+
+    void writeEyeShapes(FaceResult& r, const GazeResult& gaze, const std::array<float, 2>& ratio) const {
+        if (!r.expression) return;
+        std::vector<float>& native = r.expression->native;
+        const auto set = [&](int index, float value) {
+            if (index >= 0 && static_cast<std::size_t>(index) < native.size()) native[static_cast<std::size_t>(index)] = value;
+        };
+        for (int e = 0; e < 2; ++e) {
+            const EyeGaze& g = e == 0 ? gaze.left : gaze.right;
+            const EyeShapes& k = shapes_[e];
+            set(k.blink, blinkWeight(g.openness));
+            set(k.wide, wideWeight(ratio[e]));
+            // Yaw > 0 looks to the subject's left: outwards for the left eye, inwards for the right.
+            const float outwards = e == 0 ? g.yaw_deg : -g.yaw_deg;
+            set(k.lookOut, std::clamp(outwards / kLookSidewaysFullDeg, 0.f, 1.f));
+            set(k.lookIn, std::clamp(-outwards / kLookSidewaysFullDeg, 0.f, 1.f));
+            set(k.lookUp, std::clamp(g.pitch_deg / kLookUpFullDeg, 0.f, 1.f));
+            set(k.lookDown, std::clamp(-g.pitch_deg / kLookDownFullDeg, 0.f, 1.f));
+        }
+        r.expression->arkit = face_->toArkit(native);
+    }
+
+    std::shared_ptr<const EyeModel> eyes_;
+    std::shared_ptr<const FaceModel> face_;
+    std::array<EyeRig, 2> rigs_;
+    std::array<EyeShapes, 2> shapes_;
+};
+
+}  // namespace
+
+std::vector<int> gazeExpressions(const FaceModel& face) {
+    std::vector<int> out;
+    for (const EyeShapes& s : eyeShapes(face)) {
+        for (const int i : {s.blink, s.lookUp, s.lookDown, s.lookIn, s.lookOut, s.wide})
+            if (i >= 0) out.push_back(i);
+    }
+    return out;
+}
+
+std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
+                                               bool haveFit) {
+    if (!eyes) return pipeline::notAvailable("gaze", "no eye model (" + EyeModel::defaultPath() + " not found)");
+    if (!haveFit) return pipeline::notAvailable("gaze", "needs the fit stage's head pose");
+    return std::make_unique<GazeStage>(std::move(eyes), std::move(face));
+}
+
+}  // namespace facetrack::gaze

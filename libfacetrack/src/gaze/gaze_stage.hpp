@@ -1,0 +1,43 @@
+#pragma once
+// The "gaze" stage (Wang, Shi, Xia, Chai 2016): per eye, the eye patch cut by
+// the landmarks' corners, the pixel forest's iris and eye-opening maps, the
+// aperture forest's lid opening; then both eyes' gaze as one MAP estimate
+// (gaze_fit.hpp) with the eyeball model placed by the head pose.
+//
+// Openness: the aperture over this face's own open-eye aperture (a running
+// 70th percentile, started at the model's), 0..1; each eye on its own, so a
+// wink is a wink. A closing eye gives the fit no data: its gaze follows the
+// other eye, or holds when both close, so a blink does not move the gaze.
+//
+// Reads: landmarks, pose, identity. Fills: gaze, and the ARKit eye shapes
+// (native eyeBlink, eyeLook*, eyeWide of the face model, ARKit recomputed).
+// Never loses the face.
+
+#include "pipeline/stage.hpp"
+
+#include "facetrack/eye_model.hpp"
+#include "facetrack/face_model.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace facetrack::gaze {
+
+/// `eyes` null: the stage is not available. Needs pose (the fit stage).
+std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
+                                               bool haveFit);
+
+/// The face model's native expressions the stage writes (eyeBlink, eyeLook*,
+/// eyeWide of both eyes): the filter leaves them as they are.
+std::vector<int> gazeExpressions(const FaceModel& face);
+
+/// Openness -> ARKit weights (docs/gaze.md): eyeBlink = clamp((0.8 - openness) / 0.55),
+/// eyeWide = clamp((ratio - 1.1) / 0.3) with ratio the unclamped aperture ratio;
+/// eyeLook: 1 at 30 degrees sideways, 25 up, 30 down.
+float blinkWeight(float openness);
+float wideWeight(float apertureRatio);
+constexpr float kLookSidewaysFullDeg = 30.f;
+constexpr float kLookUpFullDeg = 25.f;
+constexpr float kLookDownFullDeg = 30.f;
+
+}  // namespace facetrack::gaze

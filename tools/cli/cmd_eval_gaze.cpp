@@ -1,0 +1,205 @@
+// facetrack eval-gaze: the gaze stage against the MediaPipe teacher labels
+// (../shared/data/teacher: another model's predictions, not ground truth) on
+// held-out clips and 300-W images, and on synthetic renders of known gaze.
+
+#include "commands.hpp"
+
+#include "app/image_view.hpp"
+#include "common/faces300w.hpp"
+#include "common/teacher.hpp"
+#include "eval_gaze_synthetic.hpp"
+
+#include "core/environment.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+namespace facetrack::cli {
+
+namespace {
+
+const char* kUsage = R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [tracker options]
+The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, not ground truth):
+  pupil    pupil centre vs the teacher's iris centre, open eyes only (aperture >= 0.8 of the
+           clip's median), over the outer-eye-corner distance: mean and p95
+  blink    per clip and eye, closed events (runs with the teacher's aperture below half the clip's
+           median): the share with eyeBlink >= 0.5 in the run (recall); and the share of clearly open
+           frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5
+  synthetic  N renders of the face model with a textured iris at known gaze (see docs/gaze.md):
+           angular error by inter-ocular bin, mean and p95
+Defaults: the held-out clips liveportrait_d14_gaze_shifts.mp4 and fgnet_talking_face_franck.mp4,
+the 300-W validation split, 400 synthetic renders.)";
+
+double percentile(std::vector<double> v, double q) {
+    if (v.empty()) return std::nan("");
+    std::sort(v.begin(), v.end());
+    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
+}
+double mean(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return v.empty() ? std::nan("") : s / static_cast<double>(v.size());
+}
+
+std::vector<std::string> splitList(const std::string& s) {
+    std::vector<std::string> out;
+    std::stringstream in(s);
+    for (std::string part; std::getline(in, part, ',');)
+        if (!part.empty()) out.push_back(part);
+    return out;
+}
+
+const EyeGaze& eyeOf(const GazeResult& g, gaze::Eye e) { return e == gaze::Eye::Left ? g.left : g.right; }
+float blinkOf(const ExpressionResult& x, gaze::Eye e) {
+    return x.arkit[static_cast<std::size_t>(arkitIndex(e == gaze::Eye::Left ? "eyeBlinkLeft" : "eyeBlinkRight"))];
+}
+
+struct ClipFrame {
+    std::optional<tools::TeacherRecord> teacher;
+    std::optional<FaceResult> face;
+};
+
+void evalClip(const std::string& shared, const std::string& clip, const std::map<std::string, tools::TeacherRecord>& teacher,
+              const TrackerConfig& config, std::vector<double>& pupilErrors, std::vector<double>& eventsFound,
+              std::vector<double>& openAsClosed) {
+    cv::VideoCapture video(shared + "/data/clips/" + clip);
+    if (!video.isOpened()) throw Error("cannot open clip " + clip);
+    Tracker tracker(Models::loadDefault(), config);
+    std::vector<ClipFrame> frames;
+    cv::Mat bgr;
+    FrameResult result;
+    for (int f = 0; video.read(bgr); ++f) {
+        tracker.process(tools::viewOf(bgr), f / 30.0, result);
+        ClipFrame cf;
+        const auto t = teacher.find(tools::teacherKey(clip, f));
+        if (t != teacher.end()) cf.teacher = t->second;
+        if (!result.faces.empty()) cf.face = result.faces[0];
+        frames.push_back(std::move(cf));
+    }
+    std::vector<double> clipPupil;
+    long events = 0, found = 0, open = 0, openClosed = 0;
+    for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
+        std::vector<double> apertures;
+        for (const auto& f : frames)
+            if (f.teacher) apertures.push_back(f.teacher->eye(e).aperture());
+        const double median = percentile(apertures, 0.5);
+        const auto aperture = [&](std::size_t i) { return frames[i].teacher ? frames[i].teacher->eye(e).aperture() : median; };
+        const auto blinks = [&](std::size_t i) {
+            const auto& f = frames[i].face;
+            return f && f->expression && blinkOf(*f->expression, e) >= 0.5f;
+        };
+        for (std::size_t i = 0; i < frames.size(); ++i) {
+            const auto& f = frames[i];
+            if (!f.teacher || !f.face || !f.face->gaze || !f.face->landmarks) continue;
+            if (aperture(i) >= 0.8 * median) {
+                const Landmarks68& l = *f.face->landmarks;
+                const double corners = std::hypot(l[45].x - l[36].x, l[45].y - l[36].y);
+                const Point2 p = eyeOf(*f.face->gaze, e).pupil_px, c = f.teacher->eye(e).iris_centre;
+                clipPupil.push_back(std::hypot(p.x - c.x, p.y - c.y) / corners);
+                ++open;
+                openClosed += blinks(i);
+            }
+        }
+        // Closed events: runs below half the median; found when eyeBlink >= 0.5 within the run (+-1 frame).
+        for (std::size_t i = 0; i < frames.size();) {
+            if (!(aperture(i) < 0.5 * median)) {
+                ++i;
+                continue;
+            }
+            std::size_t end = i;
+            while (end < frames.size() && aperture(end) < 0.5 * median) ++end;
+            bool hit = false;
+            for (std::size_t k = i > 0 ? i - 1 : 0; k < std::min(end + 1, frames.size()); ++k) hit = hit || blinks(k);
+            ++events;
+            found += hit;
+            i = end;
+        }
+    }
+    pupilErrors.insert(pupilErrors.end(), clipPupil.begin(), clipPupil.end());
+    if (events > 0) eventsFound.push_back(static_cast<double>(found) / events);
+    if (open > 0) openAsClosed.push_back(static_cast<double>(openClosed) / open);
+    std::printf("  %-44s pupil error mean %.4f p95 %.4f (%zu open eyes); blink events %ld, found %ld (recall %.2f); "
+                "open frames read as closed %.2f %% (%ld of %ld)\n",
+                clip.c_str(), mean(clipPupil), percentile(clipPupil, 0.95), clipPupil.size(), events, found,
+                events ? static_cast<double>(found) / events : std::nan(""), open ? 100.0 * openClosed / open : 0.0, openClosed, open);
+}
+
+void eval300W(const std::string& shared, tools::Split split, const TrackerConfig& config) {
+    const std::string root = tools::faces300wRoot("");
+    const auto teacher = tools::readTeacher(shared + "/data/teacher/faces300w_iris.jsonl");
+    Tracker tracker(Models::loadDefault(), config);
+    std::vector<double> errors;
+    std::vector<std::pair<const tools::TeacherRecord*, FaceResult>> faces;
+    FrameResult result;
+    std::vector<double> apertures;
+    for (const auto& image : tools::list300W(root, split)) {
+        const auto t = teacher.find(std::filesystem::relative(image.image, root).string());
+        if (t == teacher.end()) continue;
+        const cv::Mat bgr = cv::imread(image.image, cv::IMREAD_COLOR);
+        tracker.reset();
+        tracker.process(tools::viewOf(bgr), 0.0, result);
+        for (const auto& f : result.faces) {
+            if (!f.gaze || !f.landmarks) continue;
+            const Landmarks68& l = *f.landmarks;
+            // The annotated face: the teacher's irises near our eye corners.
+            const double corners = std::hypot(l[45].x - l[36].x, l[45].y - l[36].y);
+            const double off = std::hypot(0.5 * (l[36].x + l[39].x) - t->second.right.iris_centre.x,
+                                          0.5 * (l[36].y + l[39].y) - t->second.right.iris_centre.y);
+            if (off > 0.3 * corners) continue;
+            faces.emplace_back(&t->second, f);
+            for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) apertures.push_back(t->second.eye(e).aperture());
+        }
+    }
+    const double median = percentile(apertures, 0.5);
+    for (const auto& [t, f] : faces) {
+        const Landmarks68& l = *f.landmarks;
+        const double corners = std::hypot(l[45].x - l[36].x, l[45].y - l[36].y);
+        for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
+            if (!t->eye(e).in_pts_eye || t->eye(e).aperture() < 0.8 * median) continue;
+            const Point2 p = eyeOf(*f.gaze, e).pupil_px, c = t->eye(e).iris_centre;
+            errors.push_back(std::hypot(p.x - c.x, p.y - c.y) / corners);
+        }
+    }
+    std::printf("300-W %s: pupil error mean %.4f p95 %.4f outer-eye-corner distances (%zu open eyes of %zu faces)\n",
+                split == tools::Split::Test ? "test" : "validation", mean(errors), percentile(errors, 0.95), errors.size(),
+                faces.size());
+}
+
+}  // namespace
+
+int runEvalGaze(const std::vector<std::string>& argv) {
+    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic"}), {"--help", "--no-filter"});
+    if (args.has("--help")) {
+        std::puts(kUsage);
+        return 0;
+    }
+    const std::string shared = core::sharedDirectory();
+    if (shared.empty()) throw Error("../shared not found: the teacher labels and clips live there");
+    const TrackerConfig config = trackerConfig(args);
+    if (!Models::loadDefault().eyes) throw Error("no eye model: " + EyeModel::defaultPath() + " not found");
+
+    const auto clips = splitList(args.get("--clips", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
+    if (!clips.empty()) {
+        const auto teacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
+        std::vector<double> pupil, recall, openClosed;
+        std::printf("clips (teacher: MediaPipe iris + eyelids):\n");
+        for (const auto& clip : clips) evalClip(shared, clip, teacher, config, pupil, recall, openClosed);
+        std::printf("clips together: pupil error mean %.4f p95 %.4f; blink recall (mean over clips) %.2f; "
+                    "open frames read as closed %.2f %%\n",
+                    mean(pupil), percentile(pupil, 0.95), mean(recall), 100.0 * mean(openClosed));
+    }
+    const std::string split = args.get("--split", "validation");
+    if (split != "none") eval300W(shared, tools::parseSplit(split), config);
+    const int synthetic = static_cast<int>(args.number("--synthetic", 400));
+    if (synthetic > 0) evalSyntheticGaze(synthetic, config);
+    return 0;
+}
+
+}  // namespace facetrack::cli

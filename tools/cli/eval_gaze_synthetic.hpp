@@ -1,0 +1,12 @@
+#pragma once
+// eval-gaze's synthetic part: the face model rendered with a textured iris at
+// known gaze (a software rasteriser, eval_gaze_synthetic.cpp), tracked, and
+// the estimated gaze compared with the rendered one.
+
+#include "facetrack/tracker.hpp"
+
+namespace facetrack::cli {
+
+void evalSyntheticGaze(int renders, const TrackerConfig& config);
+
+}  // namespace facetrack::cli

@@ -1,0 +1,360 @@
+// train_eyes: trains the gaze stage's eye model (facetrack/eye_model.hpp) on
+// MediaPipe teacher labels (../shared/data/teacher: another model's
+// predictions, not ground truth). Eye patches are cut with facetrack's own
+// landmarks, as the stage will cut them. Held out: the 300-W validation and
+// test splits and the clips named by --holdout (docs/gaze.md).
+//
+//   build/tools/train_eyes --out models/eye_model.ftm
+
+#include "app/args.hpp"
+#include "app/image_view.hpp"
+#include "common/faces300w.hpp"
+#include "common/teacher.hpp"
+#include "gaze/eye_model_data.hpp"
+#include "gaze/forest_training.hpp"
+
+#include "core/environment.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <random>
+#include <sstream>
+
+using namespace facetrack;
+using namespace facetrack::gaze;
+
+namespace {
+
+const char* kUsage = R"(usage: train_eyes [--out models/eye_model.ftm] [--holdout CLIP,CLIP]
+                  [--pixel-trees N] [--pixel-depth D] [--aperture-trees N] [--aperture-depth D] [--seed S]
+Trains the eye model on the teacher labels in ../shared/data/teacher. Held out from training:
+300-W validation and test, and the clips of --holdout (default: liveportrait_d14_gaze_shifts.mp4,
+fgnet_talking_face_franck.mp4). Reports pixel accuracy and aperture error on the held-out eyes.)";
+
+struct EyeSample {
+    cv::Mat patch;
+    tools::PatchLabels labels;
+    bool iris_usable = true;  ///< the teacher's iris is trusted (300-W: inside the annotated eye)
+};
+
+struct Dataset {
+    std::vector<EyeSample> eyes;
+    void add(const cv::Mat& gray, const Landmarks68& landmarks, const tools::TeacherRecord& teacher, bool trusted,
+             std::mt19937* jitter) {
+        for (const Eye eye : {Eye::Left, Eye::Right}) {
+            Point2 outer = landmarks[static_cast<std::size_t>(outerCorner(eye))];
+            Point2 inner = landmarks[static_cast<std::size_t>(innerCorner(eye))];
+            if (jitter) {  // landmark noise, as the tracker's own corners have
+                const float w = std::hypot(inner.x - outer.x, inner.y - outer.y);
+                std::normal_distribution<float> n(0.f, 0.03f * w);
+                outer.x += n(*jitter), outer.y += n(*jitter), inner.x += n(*jitter), inner.y += n(*jitter);
+            }
+            EyePatch patch;
+            if (!cutEyePatch(gray, outer, inner, eye == Eye::Left, patch)) continue;
+            EyeSample s;
+            s.labels = tools::patchLabels(teacher.eye(eye), patch);
+            const Point2 c = s.labels.iris_centre;
+            // Our landmarks and the teacher's must be on the same eye.
+            if (!(c.x > 0 && c.x < kPatchWidth && c.y > 0 && c.y < kPatchHeight)) continue;
+            s.patch = patch.pixels.clone();
+            s.iris_usable = trusted && teacher.eye(eye).in_pts_eye;
+            eyes.push_back(std::move(s));
+        }
+    }
+};
+
+/// The tracker's unfiltered landmarks of the face nearest the teacher's irises.
+std::optional<Landmarks68> landmarksFor(const FrameResult& result, const tools::TeacherRecord& teacher) {
+    std::optional<Landmarks68> best;
+    float bestDistance = 1e9f;
+    for (const FaceResult& f : result.faces) {
+        if (!f.landmarks) continue;
+        const Landmarks68& l = *f.landmarks;
+        const float d = std::hypot(l[45].x - teacher.left.iris_centre.x, l[45].y - teacher.left.iris_centre.y) +
+                        std::hypot(l[36].x - teacher.right.iris_centre.x, l[36].y - teacher.right.iris_centre.y);
+        if (d < bestDistance) bestDistance = d, best = l;
+    }
+    return best;
+}
+
+/// The landmark stages only: the eye model being trained is not needed (nor the old one loaded).
+Models landmarkModels() { return Models{FaceModel::loadDefault(), LandmarkModel::loadDefault(), nullptr}; }
+
+TrackerConfig unfiltered() {
+    TrackerConfig c;
+    c.filter.enabled = false;
+    return c;
+}
+
+void addFaces300W(Dataset& data, const std::string& shared, tools::Split split, std::mt19937* jitter) {
+    const std::string root = tools::faces300wRoot("");
+    const auto teacher = tools::readTeacher(shared + "/data/teacher/faces300w_iris.jsonl");
+    Tracker tracker(landmarkModels(), unfiltered());
+    FrameResult result;
+    for (const auto& image : tools::list300W(root, split)) {
+        const std::string key = std::filesystem::relative(image.image, root).string();
+        const auto t = teacher.find(key);
+        if (t == teacher.end()) continue;
+        const cv::Mat bgr = cv::imread(image.image, cv::IMREAD_COLOR);
+        if (bgr.empty()) continue;
+        tracker.reset();
+        tracker.process(tools::viewOf(bgr), 0.0, result);
+        const auto l = landmarksFor(result, t->second);
+        if (!l) continue;
+        cv::Mat gray;
+        cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+        data.add(gray, *l, t->second, true, nullptr);
+        if (jitter) data.add(gray, *l, t->second, true, jitter);
+    }
+}
+
+void addClip(Dataset& data, const std::string& shared, const std::map<std::string, tools::TeacherRecord>& teacher,
+             const std::string& clip, std::mt19937* jitter) {
+    cv::VideoCapture video(shared + "/data/clips/" + clip);
+    if (!video.isOpened()) throw Error("cannot open clip " + clip);
+    Tracker tracker(landmarkModels(), unfiltered());
+    FrameResult result;
+    cv::Mat bgr, gray;
+    for (int frame = 0; video.read(bgr); ++frame) {
+        tracker.process(tools::viewOf(bgr), frame / 30.0, result);
+        const auto t = teacher.find(tools::teacherKey(clip, frame));
+        if (t == teacher.end()) continue;
+        const auto l = landmarksFor(result, t->second);
+        if (!l) continue;
+        cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+        data.add(gray, *l, t->second, true, nullptr);
+        if (jitter && frame % 2 == 0) data.add(gray, *l, t->second, true, jitter);
+    }
+}
+
+PatchFeature drawPixelTest(std::mt19937& rng) {
+    std::uniform_int_distribution<int> offset(-8, 8), kind(0, 19);
+    PatchFeature f;
+    const int k = kind(rng);
+    f.kind = k < 14 ? PatchFeature::Difference : k < 18 ? PatchFeature::Intensity : k < 19 ? PatchFeature::Row : PatchFeature::Column;
+    f.ax = static_cast<std::int8_t>(offset(rng));
+    f.ay = static_cast<std::int8_t>(offset(rng));
+    f.bx = static_cast<std::int8_t>(offset(rng));
+    f.by = static_cast<std::int8_t>(offset(rng));
+    return f;
+}
+
+PatchFeature drawPatchTest(std::mt19937& rng) {
+    std::uniform_int_distribution<int> x(kClassifiedRegion.x0, kClassifiedRegion.x1 - 1), y(kClassifiedRegion.y0, kClassifiedRegion.y1 - 1),
+        kind(0, 4);
+    PatchFeature f;
+    f.kind = kind(rng) < 4 ? PatchFeature::Difference : PatchFeature::Intensity;
+    f.ax = static_cast<std::int8_t>(x(rng));
+    f.ay = static_cast<std::int8_t>(y(rng));
+    f.bx = static_cast<std::int8_t>(x(rng));
+    f.by = static_cast<std::int8_t>(y(rng));
+    return f;
+}
+
+struct PixelSet {
+    std::vector<cv::Mat> patches;
+    std::vector<PatchSample> samples;
+    std::vector<float> targets;
+};
+
+PixelSet pixelSamples(const Dataset& data, int perPatch, unsigned seed) {
+    PixelSet set;
+    std::mt19937 rng(seed);
+    const PatchRegion r = kClassifiedRegion;
+    std::uniform_int_distribution<int> x(r.x0, r.x1 - 1), y(r.y0, r.y1 - 1);
+    for (const EyeSample& e : data.eyes) {
+        if (!e.iris_usable) continue;
+        const int p = static_cast<int>(set.patches.size());
+        set.patches.push_back(e.patch);
+        for (int i = 0; i < perPatch; ++i) {
+            PatchSample s{p, x(rng), y(rng)};
+            if (i % 4 == 3) {  // a quarter near the iris, where the boundary is
+                std::normal_distribution<float> n(0.f, e.labels.iris_radius + 1.f);
+                s.x = std::clamp(static_cast<int>(std::lround(e.labels.iris_centre.x + n(rng))), r.x0, r.x1 - 1);
+                s.y = std::clamp(static_cast<int>(std::lround(e.labels.iris_centre.y + n(rng))), r.y0, r.y1 - 1);
+            }
+            set.samples.push_back(s);
+            const int c = e.labels.pixelClass(static_cast<float>(s.x), static_cast<float>(s.y));
+            for (int k = 0; k < kPixelClasses; ++k) set.targets.push_back(k == c ? 1.f : 0.f);
+        }
+    }
+    return set;
+}
+
+void reportPixels(const PatchForest& forest, const Dataset& data, const char* name) {
+    long correct = 0, total = 0, irisBoth = 0, irisEither = 0;
+    const PatchRegion r = kClassifiedRegion;
+    float p[kPixelClasses];
+    for (const EyeSample& e : data.eyes) {
+        if (!e.iris_usable) continue;
+        for (int y = r.y0; y < r.y1; ++y) {
+            for (int x = r.x0; x < r.x1; ++x) {
+                forest.evaluate(e.patch, x, y, p);
+                const int predicted = static_cast<int>(std::max_element(p, p + kPixelClasses) - p);
+                const int truth = e.labels.pixelClass(static_cast<float>(x), static_cast<float>(y));
+                correct += predicted == truth;
+                ++total;
+                irisBoth += predicted == kIris && truth == kIris;
+                irisEither += predicted == kIris || truth == kIris;
+            }
+        }
+    }
+    std::printf("  %s: pixel accuracy %.3f, iris IoU %.3f over %ld pixels\n", name, total ? double(correct) / total : 0.0,
+                irisEither ? double(irisBoth) / irisEither : 0.0, total);
+}
+
+void reportAperture(const PatchForest& forest, const Dataset& data, const char* name) {
+    double absError = 0, sumT = 0, sumP = 0, sumTT = 0, sumPP = 0, sumTP = 0;
+    const double n = static_cast<double>(data.eyes.size());
+    for (const EyeSample& e : data.eyes) {
+        float a;
+        forest.evaluate(e.patch, 0, 0, &a);
+        const double t = e.labels.aperture;
+        absError += std::fabs(a - t);
+        sumT += t, sumP += a, sumTT += t * t, sumPP += a * a, sumTP += t * a;
+    }
+    const double cov = sumTP / n - sumT * sumP / n / n;
+    const double r = cov / std::sqrt((sumTT / n - sumT * sumT / n / n) * (sumPP / n - sumP * sumP / n / n));
+    std::printf("  %s: aperture mean absolute error %.4f eye widths (mean teacher aperture %.3f), r = %.3f over %zu eyes\n", name,
+                absError / n, sumT / n, r, data.eyes.size());
+}
+
+std::vector<std::string> split(const std::string& s) {
+    std::vector<std::string> out;
+    std::stringstream in(s);
+    for (std::string part; std::getline(in, part, ',');)
+        if (!part.empty()) out.push_back(part);
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
+                               {"--out", "--holdout", "--pixel-trees", "--pixel-depth", "--aperture-trees", "--aperture-depth", "--seed"},
+                               {"--help"});
+        if (args.has("--help")) {
+            std::puts(kUsage);
+            return 0;
+        }
+        const std::string shared = core::sharedDirectory();
+        if (shared.empty()) throw Error("../shared not found: the teacher labels live there");
+        const std::string out = args.get("--out", "models/eye_model.ftm");
+        const auto holdout = split(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
+        const unsigned seed = static_cast<unsigned>(args.number("--seed", 1));
+        const auto start = std::chrono::steady_clock::now();
+        const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+
+        std::mt19937 jitter(seed);
+        Dataset train, validation, heldClips;
+        addFaces300W(train, shared, tools::Split::Train, &jitter);
+        std::printf("300-W train: %zu eye patches (%.0f s)\n", train.eyes.size(), seconds());
+        addFaces300W(validation, shared, tools::Split::Validation, nullptr);
+        std::printf("300-W validation: %zu eye patches (%.0f s)\n", validation.eyes.size(), seconds());
+        const auto clipTeacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
+        std::vector<std::string> trainClips;
+        for (const auto& entry : std::filesystem::directory_iterator(shared + "/data/clips")) {
+            const std::string name = entry.path().filename().string();
+            if (entry.path().extension() != ".mp4") continue;
+            const bool held = std::find(holdout.begin(), holdout.end(), name) != holdout.end();
+            addClip(held ? heldClips : train, shared, clipTeacher, name, held ? nullptr : &jitter);
+            if (!held) trainClips.push_back(name);
+            std::printf("clip %s: %s, %zu / %zu eye patches so far (%.0f s)\n", name.c_str(), held ? "held out" : "train",
+                        train.eyes.size(), heldClips.eyes.size(), seconds());
+        }
+        std::sort(trainClips.begin(), trainClips.end());
+
+        // Pixel classifier.
+        const PixelSet pixels = pixelSamples(train, 64, seed);
+        ForestTrainingOptions po;
+        po.trees = static_cast<int>(args.number("--pixel-trees", 8));
+        po.depth = static_cast<int>(args.number("--pixel-depth", 10));
+        po.seed = seed;
+        po.draw = drawPixelTest;
+        std::mutex printing;
+        po.progress = [&](int done, int total) {
+            std::lock_guard<std::mutex> lock(printing);
+            std::printf("pixel forest: tree %d / %d (%.0f s)\n", done, total, seconds());
+            std::fflush(stdout);
+        };
+        EyeModelData model;
+        std::printf("pixel forest: %zu pixel samples from %zu patches\n", pixels.samples.size(), pixels.patches.size());
+        model.pixels = trainPatchForest(pixels.patches, pixels.samples, pixels.targets, kPixelClasses, po);
+
+        // Aperture regressor: one sample per patch, anchored at the origin;
+        // every tenth training eye is kept back to calibrate its output.
+        PixelSet apertures;
+        std::vector<const EyeSample*> calibration;
+        for (std::size_t i = 0; i < train.eyes.size(); ++i) {
+            const EyeSample& e = train.eyes[i];
+            if (i % 10 == 9) {
+                calibration.push_back(&e);
+                continue;
+            }
+            apertures.samples.push_back({static_cast<int>(apertures.patches.size()), 0, 0});
+            apertures.patches.push_back(e.patch);
+            apertures.targets.push_back(e.labels.aperture);
+        }
+        ForestTrainingOptions ao;
+        ao.trees = static_cast<int>(args.number("--aperture-trees", 48));
+        ao.depth = static_cast<int>(args.number("--aperture-depth", 9));
+        ao.min_leaf = 4;
+        ao.samples_per_tree = static_cast<int>(apertures.samples.size());
+        ao.search_samples = 6000;
+        ao.seed = seed + 1;
+        ao.draw = drawPatchTest;
+        ao.progress = [&](int done, int total) {
+            if (done % 8 != 0 && done != total) return;
+            std::lock_guard<std::mutex> lock(printing);
+            std::printf("aperture forest: tree %d / %d (%.0f s)\n", done, total, seconds());
+            std::fflush(stdout);
+        };
+        model.aperture = trainPatchForest(apertures.patches, apertures.samples, apertures.targets, 1, ao);
+
+        // Openness 0 and 1 in the forest's own output, on the kept-back eyes.
+        std::vector<float> open, closed;
+        for (const EyeSample* e : calibration) {
+            float a;
+            model.aperture.evaluate(e->patch, 0, 0, &a);
+            (e->labels.aperture < 0.1f ? closed : open).push_back(a);
+        }
+        if (closed.size() < 10 || open.size() < 100) throw Error("too few closed or open eyes to calibrate the aperture");
+        std::sort(open.begin(), open.end());
+        std::sort(closed.begin(), closed.end());
+        model.open_aperture = open[open.size() / 2];
+        model.closed_aperture = closed[closed.size() / 2];
+
+        std::ostringstream provenance;
+        provenance << "train_eyes, seed " << seed << ": " << model.pixels.treeCount() << " pixel trees of depth " << model.pixels.depth
+                   << ", " << model.aperture.treeCount() << " aperture trees of depth " << model.aperture.depth
+                   << "; MediaPipe teacher labels (not ground truth) on 300-W train and the clips";
+        for (const auto& c : trainClips) provenance << " " << c;
+        provenance << "; patches cut with facetrack's own landmarks";
+        model.provenance = provenance.str();
+        writeEyeModel(out, model);
+        std::printf("wrote %s (%.1f kB) in %.0f s: %s\n", out.c_str(), std::filesystem::file_size(out) / 1024.0, seconds(),
+                    model.provenance.c_str());
+        std::printf("aperture forest output: open %.3f, closed %.3f (medians over %zu and %zu kept-back eyes)\n", model.open_aperture,
+                    model.closed_aperture, open.size(), closed.size());
+        reportPixels(model.pixels, train, "train");
+        reportPixels(model.pixels, validation, "300-W validation");
+        reportPixels(model.pixels, heldClips, "held-out clips");
+        reportAperture(model.aperture, train, "train");
+        reportAperture(model.aperture, validation, "300-W validation");
+        reportAperture(model.aperture, heldClips, "held-out clips");
+        return 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "train_eyes: %s\n", e.what());
+        return 1;
+    }
+}
