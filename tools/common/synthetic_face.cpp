@@ -57,12 +57,20 @@ Landmarks68 SyntheticRenderer::landmarks(const SyntheticFace& f) const {
     return out;
 }
 
+Box SyntheticRenderer::faceBox(const SyntheticFace& f) const {
+    Box b{1e9f, 1e9f, -1e9f, -1e9f};
+    for (const Point2& p : landmarks(f))
+        b = {std::min(b.x0, p.x), std::min(b.y0, p.y), std::max(b.x1, p.x), std::max(b.y1, p.y)};
+    const float pad = 0.1f * b.width();
+    return {b.x0 - pad, b.y0 - 2 * pad, b.x1 + pad, b.y1 + pad};
+}
+
 float SyntheticRenderer::interocularPx(const SyntheticFace& f) const {
     const float iod = model_->leftEyeball().centre.x - model_->rightEyeball().centre.x;
     return f.fx * iod / f.translation_mm.z;
 }
 
-cv::Mat SyntheticRenderer::render(const SyntheticFace& f) const {
+cv::Mat SyntheticRenderer::render(const SyntheticFace& f, ClassMap* classes) const {
     const std::vector<Vec3> mesh = model_->vertices({}, f.expression);
     const Eigen::Matrix3f R = rotationOf(f.rotation);
     const Eigen::Vector3f t = eig(f.translation_mm);
@@ -76,7 +84,7 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f) const {
     }
     cv::Mat depth(f.height, f.width, CV_32F, cv::Scalar(1e9f));
     cv::Mat shade(f.height, f.width, CV_32F, cv::Scalar(40.f));  // background
-    const Eigen::Vector3f light = Eigen::Vector3f(0.3f, -0.4f, -1.f).normalized();  // from above-left of the camera
+    const Eigen::Vector3f light = Eigen::Vector3f(f.light[0], f.light[1], f.light[2]).normalized();
     for (const auto& tri : skin_) {
         std::array<Eigen::Vector2f, 3> p;
         std::array<float, 3> z, lit;
@@ -87,7 +95,7 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f) const {
             p[k] = {f.fx * v.x() / v.z() + f.cx, f.fy * v.y() / v.z() + f.cy};
             z[k] = v.z();
             const Eigen::Vector3f nn = normal[static_cast<std::size_t>(tri[static_cast<std::size_t>(k)])].normalized();
-            lit[k] = 0.35f + 0.65f * std::max(0.f, -nn.dot(light));
+            lit[k] = 0.35f + 0.65f * std::fabs(nn.dot(light));  // either winding
         }
         if (behind) continue;
         const float area = (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
@@ -107,7 +115,7 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f) const {
                 float& d = depth.at<float>(y, x);
                 if (zz >= d) continue;
                 d = zz;
-                shade.at<float>(y, x) = 185.f * (w0 * lit[0] + w1 * lit[1] + w2 * lit[2]);
+                shade.at<float>(y, x) = 185.f * f.skin * (w0 * lit[0] + w1 * lit[1] + w2 * lit[2]);
             }
         }
     }
@@ -116,6 +124,7 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f) const {
     const auto rigs = EyeRig::both(*model_);
     const float radius = gaze::eyeballRadiusMm();
     cv::Mat eyeball(f.height, f.width, CV_8U, cv::Scalar(0));
+    cv::Mat kind(f.height, f.width, CV_8U, cv::Scalar(0));
     for (int e = 0; e < 2; ++e) {
         const Eigen::Vector3f centre = R * gaze::rotationCentre(geometry[static_cast<std::size_t>(e)], rigs[static_cast<std::size_t>(e)].centre(mesh)) + t;
         const Eigen::Vector3f g = R * gaze::gazeDirection(f.gaze_deg[static_cast<std::size_t>(e)][0] * kDeg,
@@ -138,9 +147,11 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f) const {
                 if (along >= gaze::kIrisDistanceMm) {
                     const Eigen::Vector3f across = local - along * g;
                     const float radial = across.norm() / gaze::kIrisRadiusMm;
-                    value = irisShade(std::min(radial, 1.f), std::atan2(across.dot(v), across.dot(u)));
+                    value = std::min(250.f, f.iris * irisShade(std::min(radial, 1.f), std::atan2(across.dot(v), across.dot(u))));
+                    kind.at<std::uint8_t>(y, x) = 2;
                 } else {
-                    value = 215.f * (0.75f + 0.25f * std::max(0.f, -local.normalized().dot(light)));
+                    kind.at<std::uint8_t>(y, x) = 1;
+                    value = 215.f * (0.75f + 0.25f * std::max(0.f, local.normalized().dot(light)));
                 }
                 shade.at<float>(y, x) = value;
                 eyeball.at<std::uint8_t>(y, x) = 255;
@@ -149,8 +160,10 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f) const {
     }
     // Lash lines: the skin bordering the visible eyeball darkens, as real lids do.
     cv::Mat rim;
-    cv::dilate(eyeball, rim, cv::Mat(), cv::Point(-1, -1), std::max(1, static_cast<int>(std::lround(interocularPx(f) / 60.f))));
-    shade.setTo(cv::Scalar(55.f), rim & ~eyeball);
+    cv::dilate(eyeball, rim, cv::Mat(), cv::Point(-1, -1),
+               std::max(1, static_cast<int>(std::lround(f.lash * interocularPx(f) / 60.f))));
+    shade.setTo(cv::Scalar(std::clamp(90.f - 35.f * f.lash, 20.f, 120.f)), rim & ~eyeball);
+    if (classes) *classes = kind;
     cv::Mat image;
     shade.convertTo(image, CV_8U);
     if (f.blur_sigma > 0.f) cv::GaussianBlur(image, image, cv::Size(), f.blur_sigma);

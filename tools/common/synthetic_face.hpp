@@ -28,18 +28,28 @@ struct SyntheticFace {
     int width = 640, height = 480;
     float noise_sigma = 2.f;       ///< grey levels, Gaussian
     float blur_sigma = 0.f;        ///< pixels
+    float skin = 1.f;              ///< skin albedo (1: a light skin)
+    float iris = 1.f;              ///< iris albedo (1: a mid brown; below 1 darker, above lighter)
+    float lash = 1.f;              ///< lash line darkness and width
+    std::array<float, 3> light{-0.3f, -0.4f, -1.f};  ///< towards the light, camera frame
     unsigned seed = 1;
 };
+
+/// Per pixel of a render: what it shows (gaze::PixelClass values: skin 0, sclera 1, iris 2).
+using ClassMap = cv::Mat;  // CV_8U
 
 class SyntheticRenderer {
 public:
     explicit SyntheticRenderer(std::shared_ptr<const FaceModel> model);
-    /// BGR, width x height.
-    cv::Mat render(const SyntheticFace& face) const;
+    /// BGR, width x height; `classes`, when given, gets each pixel's class.
+    cv::Mat render(const SyntheticFace& face, ClassMap* classes = nullptr) const;
     /// The true gaze direction of eye e (0 left, 1 right) in the camera frame.
     Vec3 gazeInCamera(const SyntheticFace& face, int e) const;
-    /// The 68 landmarks' projections (a box for the tracker).
+    /// The 68 landmarks' projections.
     Landmarks68 landmarks(const SyntheticFace& face) const;
+    /// A face detector's box for the render: the landmarks' bounding box with
+    /// 10 % margins, 20 % above (a detector's box includes the forehead).
+    Box faceBox(const SyntheticFace& face) const;
     /// The distance between the eyeball centres in pixels (the inter-ocular distance).
     float interocularPx(const SyntheticFace& face) const;
 

@@ -9,6 +9,7 @@
 #include "app/args.hpp"
 #include "app/image_view.hpp"
 #include "common/faces300w.hpp"
+#include "common/synthetic_face.hpp"
 #include "common/teacher.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "gaze/forest_training.hpp"
@@ -16,6 +17,7 @@
 #include "core/environment.hpp"
 #include "facetrack/facetrack.hpp"
 
+#include <Eigen/Geometry>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -36,15 +38,32 @@ namespace {
 
 const char* kUsage = R"(usage: train_eyes [--out models/eye_model.ftm] [--holdout CLIP,CLIP]
                   [--pixel-trees N] [--pixel-depth D] [--aperture-trees N] [--aperture-depth D] [--seed S]
+                  [--synthetic RENDERS] [--synthetic-pixels]
 Trains the eye model on the teacher labels in ../shared/data/teacher. Held out from training:
 300-W validation and test, and the clips of --holdout (default: liveportrait_d14_gaze_shifts.mp4,
-fgnet_talking_face_franck.mp4). Reports pixel accuracy and aperture error on the held-out eyes.)";
+fgnet_talking_face_franck.mp4). The aperture forest also learns from RENDERS synthetic renders of
+the face model (default 2,500; exact classes and apertures; eval-gaze renders others), and the pixel
+forest too with --synthetic-pixels. Reports pixel accuracy and aperture error on held-out eyes.)";
 
 struct EyeSample {
     cv::Mat patch;
     tools::PatchLabels labels;
     bool iris_usable = true;  ///< the teacher's iris is trusted (300-W: inside the annotated eye)
+    cv::Mat classes;          ///< synthetic eyes: the exact class of every patch pixel (CV_8U)
 };
+
+/// A synthetic eye's aperture, measured as the teacher's is: the visible eye's
+/// height at 35, 50 and 65 % of the way between the corners, over the eye width.
+float apertureOfClasses(const cv::Mat& classes) {
+    float gap = 0.f;
+    for (const float s : {0.35f, 0.5f, 0.65f}) {
+        const int x = static_cast<int>(std::lround(kOuterX + s * kEyeWidth));
+        int open = 0;
+        for (int y = 0; y < classes.rows; ++y) open += classes.at<std::uint8_t>(y, x) > 0;
+        gap += static_cast<float>(open) / 3.f;
+    }
+    return gap / kEyeWidth;
+}
 
 struct Dataset {
     std::vector<EyeSample> eyes;
@@ -136,6 +155,85 @@ void addClip(Dataset& data, const std::string& shared, const std::map<std::strin
     }
 }
 
+/// Renders of the face model (tools/common/synthetic_face.hpp) with exact pixel
+/// classes: eyes at every gaze, head pose and size, which the teacher's data has
+/// few of. Their parameters come from their own generator (`seed`), not the
+/// one eval-gaze's renders use.
+void addSynthetic(Dataset& data, int renders, unsigned seed, std::mt19937& jitter) {
+    const Models models = landmarkModels();
+    tools::SyntheticRenderer renderer(models.face);
+    TrackerConfig config = unfiltered();
+    config.camera.focal_length_px = tools::SyntheticFace{}.fx;
+    Tracker tracker(models, config);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.f, 1.f);
+    const auto in = [&](float lo, float hi) { return lo + (hi - lo) * unit(rng); };
+    const auto& names = models.face->expressionNames();
+    const auto index = [&](const std::string& n) { return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin()); };
+    FrameResult result;
+    for (int i = 0; i < renders; ++i) {
+        tools::SyntheticFace f;
+        const float iod = in(35, 140);
+        f.translation_mm = {in(-40, 40), in(-30, 30), f.fx * 62.3f / iod};
+        const Eigen::Quaternionf q = Eigen::Quaternionf(0.f, 1.f, 0.f, 0.f) *
+                                     Eigen::AngleAxisf(in(-35, 35) * 0.01745f, Eigen::Vector3f::UnitY()) *
+                                     Eigen::AngleAxisf(in(-15, 15) * 0.01745f, Eigen::Vector3f::UnitX()) *
+                                     Eigen::AngleAxisf(in(-10, 10) * 0.01745f, Eigen::Vector3f::UnitZ());
+        f.rotation = {q.w(), q.x(), q.y(), q.z()};
+        const float yaw = in(-32, 32), pitch = in(-25, 22), vergence = in(0, 6);
+        f.gaze_deg = {{{yaw - vergence / 2, pitch}, {yaw + vergence / 2, pitch}}};
+        f.expression.assign(names.size(), 0.f);
+        for (const char* side : {"_L", "_R"}) {
+            f.expression[index(std::string("eyeBlink") + side)] = unit(rng) < 0.3f ? in(0.f, 1.f) : 0.f;
+            f.expression[index(std::string(pitch < 0 ? "eyeLookDown" : "eyeLookUp") + side)] = std::fabs(pitch) / 30.f * in(0.5f, 1.f);
+        }
+        f.skin = in(0.45f, 1.15f);
+        f.iris = in(0.4f, 1.8f);
+        f.lash = in(0.3f, 1.6f);
+        f.light = {in(-0.8f, 0.8f), in(-0.8f, 0.4f), -1.f};
+        f.noise_sigma = in(1.f, 5.f);
+        f.blur_sigma = in(0.f, 1.2f);
+        f.seed = seed * 100003u + static_cast<unsigned>(i);
+        tools::ClassMap classes;
+        const cv::Mat image = renderer.render(f, &classes);
+        tracker.reset();
+        tracker.process(tools::viewOf(image), 0.0, {renderer.faceBox(f)}, result);
+        if (result.faces.empty() || !result.faces[0].landmarks) continue;
+        cv::Mat gray;
+        cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+        for (int variant = 0; variant < 2; ++variant) {
+            for (const Eye eye : {Eye::Left, Eye::Right}) {
+                Point2 outer = (*result.faces[0].landmarks)[static_cast<std::size_t>(outerCorner(eye))];
+                Point2 inner = (*result.faces[0].landmarks)[static_cast<std::size_t>(innerCorner(eye))];
+                if (variant == 1) {
+                    const float w = std::hypot(inner.x - outer.x, inner.y - outer.y);
+                    std::normal_distribution<float> n(0.f, 0.03f * w);
+                    outer.x += n(jitter), outer.y += n(jitter), inner.x += n(jitter), inner.y += n(jitter);
+                }
+                EyePatch patch;
+                if (!cutEyePatch(gray, outer, inner, eye == Eye::Left, patch)) continue;
+                EyeSample s;
+                s.patch = patch.pixels.clone();
+                s.classes = cv::Mat(kPatchHeight, kPatchWidth, CV_8U);
+                for (int y = 0; y < kPatchHeight; ++y) {
+                    for (int x = 0; x < kPatchWidth; ++x) {
+                        const Point2 p = toImage(patch, {static_cast<float>(x), static_cast<float>(y)});
+                        const int px = std::clamp(static_cast<int>(std::lround(p.x)), 0, classes.cols - 1);
+                        const int py = std::clamp(static_cast<int>(std::lround(p.y)), 0, classes.rows - 1);
+                        s.classes.at<std::uint8_t>(y, x) = classes.at<std::uint8_t>(py, px);
+                    }
+                }
+                s.labels.aperture = apertureOfClasses(s.classes);
+                data.eyes.push_back(std::move(s));
+            }
+        }
+    }
+}
+
+int pixelClassOf(const EyeSample& e, int x, int y) {
+    return e.classes.empty() ? e.labels.pixelClass(static_cast<float>(x), static_cast<float>(y)) : e.classes.at<std::uint8_t>(y, x);
+}
+
 PatchFeature drawPixelTest(std::mt19937& rng) {
     std::uniform_int_distribution<int> offset(-8, 8), kind(0, 19);
     PatchFeature f;
@@ -166,24 +264,24 @@ struct PixelSet {
     std::vector<float> targets;
 };
 
-PixelSet pixelSamples(const Dataset& data, int perPatch, unsigned seed) {
+PixelSet pixelSamples(const Dataset& data, int perPatch, unsigned seed, bool withSynthetic) {
     PixelSet set;
     std::mt19937 rng(seed);
     const PatchRegion r = kClassifiedRegion;
     std::uniform_int_distribution<int> x(r.x0, r.x1 - 1), y(r.y0, r.y1 - 1);
     for (const EyeSample& e : data.eyes) {
-        if (!e.iris_usable) continue;
+        if (!e.iris_usable || (!e.classes.empty() && !withSynthetic)) continue;
         const int p = static_cast<int>(set.patches.size());
         set.patches.push_back(e.patch);
         for (int i = 0; i < perPatch; ++i) {
             PatchSample s{p, x(rng), y(rng)};
-            if (i % 4 == 3) {  // a quarter near the iris, where the boundary is
+            if (i % 4 == 3 && e.classes.empty()) {  // a quarter near the iris, where the boundary is
                 std::normal_distribution<float> n(0.f, e.labels.iris_radius + 1.f);
                 s.x = std::clamp(static_cast<int>(std::lround(e.labels.iris_centre.x + n(rng))), r.x0, r.x1 - 1);
                 s.y = std::clamp(static_cast<int>(std::lround(e.labels.iris_centre.y + n(rng))), r.y0, r.y1 - 1);
             }
             set.samples.push_back(s);
-            const int c = e.labels.pixelClass(static_cast<float>(s.x), static_cast<float>(s.y));
+            const int c = pixelClassOf(e, s.x, s.y);
             for (int k = 0; k < kPixelClasses; ++k) set.targets.push_back(k == c ? 1.f : 0.f);
         }
     }
@@ -200,7 +298,7 @@ void reportPixels(const PatchForest& forest, const Dataset& data, const char* na
             for (int x = r.x0; x < r.x1; ++x) {
                 forest.evaluate(e.patch, x, y, p);
                 const int predicted = static_cast<int>(std::max_element(p, p + kPixelClasses) - p);
-                const int truth = e.labels.pixelClass(static_cast<float>(x), static_cast<float>(y));
+                const int truth = pixelClassOf(e, x, y);
                 correct += predicted == truth;
                 ++total;
                 irisBoth += predicted == kIris && truth == kIris;
@@ -241,8 +339,9 @@ std::vector<std::string> split(const std::string& s) {
 int main(int argc, char** argv) {
     try {
         const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                               {"--out", "--holdout", "--pixel-trees", "--pixel-depth", "--aperture-trees", "--aperture-depth", "--seed"},
-                               {"--help"});
+                               {"--out", "--holdout", "--pixel-trees", "--pixel-depth", "--aperture-trees", "--aperture-depth", "--seed",
+                                "--synthetic"},
+                               {"--help", "--synthetic-pixels"});
         if (args.has("--help")) {
             std::puts(kUsage);
             return 0;
@@ -273,9 +372,18 @@ int main(int argc, char** argv) {
                         train.eyes.size(), heldClips.eyes.size(), seconds());
         }
         std::sort(trainClips.begin(), trainClips.end());
+        const int synthetic = static_cast<int>(args.number("--synthetic", 2500));
+        Dataset synth;
+        addSynthetic(synth, synthetic, seed + 1000, jitter);
+        std::printf("synthetic: %zu eye patches from %d renders (%.0f s)\n", synth.eyes.size(), synthetic, seconds());
+        const std::size_t realEyes = train.eyes.size();
+        for (auto& e : synth.eyes) train.eyes.push_back(std::move(e));
 
         // Pixel classifier.
-        const PixelSet pixels = pixelSamples(train, 64, seed);
+        // Synthetic eyes teach the aperture forest closed and half-closed eyes at
+        // every pose; in the pixel forest they cost accuracy on real eyes
+        // (docs/benchmarks.md), so they go there only when asked.
+        const PixelSet pixels = pixelSamples(train, 64, seed, args.has("--synthetic-pixels"));
         ForestTrainingOptions po;
         po.trees = static_cast<int>(args.number("--pixel-trees", 8));
         po.depth = static_cast<int>(args.number("--pixel-depth", 10));
@@ -339,17 +447,20 @@ int main(int argc, char** argv) {
                    << ", " << model.aperture.treeCount() << " aperture trees of depth " << model.aperture.depth
                    << "; MediaPipe teacher labels (not ground truth) on 300-W train and the clips";
         for (const auto& c : trainClips) provenance << " " << c;
-        provenance << "; patches cut with facetrack's own landmarks";
+        provenance << "; " << synthetic << " synthetic renders (" << (args.has("--synthetic-pixels") ? "both forests" : "aperture forest")
+                   << "); patches cut with facetrack's own landmarks";
         model.provenance = provenance.str();
         writeEyeModel(out, model);
         std::printf("wrote %s (%.1f kB) in %.0f s: %s\n", out.c_str(), std::filesystem::file_size(out) / 1024.0, seconds(),
                     model.provenance.c_str());
         std::printf("aperture forest output: open %.3f, closed %.3f (medians over %zu and %zu kept-back eyes)\n", model.open_aperture,
                     model.closed_aperture, open.size(), closed.size());
-        reportPixels(model.pixels, train, "train");
+        Dataset realTrain;
+        realTrain.eyes.assign(train.eyes.begin(), train.eyes.begin() + static_cast<std::ptrdiff_t>(realEyes));
+        reportPixels(model.pixels, realTrain, "train (teacher)");
         reportPixels(model.pixels, validation, "300-W validation");
         reportPixels(model.pixels, heldClips, "held-out clips");
-        reportAperture(model.aperture, train, "train");
+        reportAperture(model.aperture, realTrain, "train");
         reportAperture(model.aperture, validation, "300-W validation");
         reportAperture(model.aperture, heldClips, "held-out clips");
         return 0;

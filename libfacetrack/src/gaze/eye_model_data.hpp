@@ -8,9 +8,15 @@
 
 namespace facetrack::gaze {
 
-/// Where in the patch the pixel classifier runs: the eye and its lids.
+/// Where in the patch the pixel classifier runs: the eye and its lids, on a
+/// grid of every `step`-th pixel (the iris is about 12 patch pixels across).
 struct PatchRegion {
-    int x0 = 2, x1 = 38, y0 = 4, y1 = 24;
+    int x0 = 2, x1 = 38, y0 = 4, y1 = 24, step = 2;
+    constexpr int columns() const { return (x1 - x0 + step - 1) / step; }
+    constexpr int rows() const { return (y1 - y0 + step - 1) / step; }
+    /// Patch coordinates of grid cell (i, j).
+    constexpr int x(int i) const { return x0 + step * i; }
+    constexpr int y(int j) const { return y0 + step * j; }
 };
 constexpr PatchRegion kClassifiedRegion{};
 

@@ -11,8 +11,8 @@ namespace facetrack::gaze {
 
 namespace {
 constexpr float kDeg = 3.14159265358979f / 180.f;
-constexpr int kRegionW = kClassifiedRegion.x1 - kClassifiedRegion.x0;
-constexpr int kRegionH = kClassifiedRegion.y1 - kClassifiedRegion.y0;
+constexpr int kRegionW = kClassifiedRegion.columns();
+constexpr int kRegionH = kClassifiedRegion.rows();
 constexpr int kDataResiduals = kRegionW * kRegionH;
 constexpr int kPriorResiduals = 2 + 4 + 4;  // binocular 2, temporal 4, ahead 4
 constexpr int kResiduals = 2 * kDataResiduals + kPriorResiduals;
@@ -49,7 +49,7 @@ void dataResiduals(const EyeObservation& eye, const Eigen::Matrix3f& R, const fi
         const float* pi = eye.iris->ptr<float>(y);
         const float* po = eye.open->ptr<float>(y);
         for (int x = 0; x < kRegionW; ++x) {
-            const Eigen::Vector2f q(static_cast<float>(x + kClassifiedRegion.x0), static_cast<float>(y + kClassifiedRegion.y0));
+            const Eigen::Vector2f q(static_cast<float>(kClassifiedRegion.x(x)), static_cast<float>(kClassifiedRegion.y(y)));
             const float rho = (inverse * (q - iris.centre)).norm();
             const float inside = 1.f / (1.f + std::exp(-sharpness * (1.f - rho)));
             r[y * kRegionW + x] = scale * (pi[x] - inside * po[x]);
@@ -82,10 +82,11 @@ bool centroidGuess(const EyeObservation& eye, const Eigen::Matrix3f& R, const fi
         for (int x = 0; x < kRegionW; ++x) {
             const double m = pi[x] * pi[x];
             mass += m;
-            sx += m * (x + kClassifiedRegion.x0);
-            sy += m * (y + kClassifiedRegion.y0);
+            sx += m * kClassifiedRegion.x(x);
+            sy += m * kClassifiedRegion.y(y);
         }
     }
+    // About four grid cells of certain iris.
     if (mass < 4.0) return false;
     const Point2 image = toImage(*eye.patch, {static_cast<float>(sx / mass), static_cast<float>(sy / mass)});
     // Ray through the pixel, nearest point on it to the eyeball centre, then onto the sphere of radius d_i.
@@ -139,6 +140,8 @@ bool projectIris(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit:
 
 GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matrix3f& R, const fit::Camera& camera,
                    const GazeAngles& previous, bool havePrevious, const GazeFitSettings& s) {
+    // Both eyes closed: nothing to see, the gaze holds (the priors alone would drift it towards ahead).
+    if (havePrevious && eyes[0].weight <= 0.f && eyes[1].weight <= 0.f) return previous;
     GazeAngles a = havePrevious ? previous : GazeAngles{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
     std::array<bool, 2> guessed{false, false};
     for (int e = 0; e < 2; ++e) {

@@ -50,7 +50,7 @@ float eyeballRadiusMm();
 /// One eye as the fit sees it.
 struct EyeObservation {
     const EyePatch* patch = nullptr;
-    const cv::Mat* iris = nullptr;  ///< P(iris), kClassifiedRegion-sized CV_32F
+    const cv::Mat* iris = nullptr;  ///< P(iris) on kClassifiedRegion's grid (rows() x columns(), CV_32F)
     const cv::Mat* open = nullptr;  ///< P(sclera) + P(iris), same size
     float weight = 0.f;             ///< 0 closed .. 1 open
     Eigen::Vector3f centre;         ///< eyeball rotation centre, camera frame, mm

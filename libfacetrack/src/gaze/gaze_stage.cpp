@@ -2,6 +2,7 @@
 
 #include "gaze/eye_model_data.hpp"
 #include "gaze/eye_patch.hpp"
+#include "filter/one_euro.hpp"
 #include "gaze/gaze_fit.hpp"
 
 #include "facetrack/posed_mesh.hpp"
@@ -19,8 +20,8 @@ float wideWeight(float ratio) { return std::clamp((ratio - 1.1f) / 0.3f, 0.f, 1.
 namespace {
 
 constexpr float kDeg = 3.14159265358979f / 180.f;
-constexpr int kRegionW = kClassifiedRegion.x1 - kClassifiedRegion.x0;
-constexpr int kRegionH = kClassifiedRegion.y1 - kClassifiedRegion.y0;
+constexpr int kRegionW = kClassifiedRegion.columns();
+constexpr int kRegionH = kClassifiedRegion.rows();
 /// The open-eye reference: a running 70th percentile of the aperture, moved by this much a frame.
 constexpr float kReferenceQuantile = 0.7f;
 constexpr float kReferenceStep = 0.002f;
@@ -32,13 +33,23 @@ struct EyeState {
     float reference = 0.f;  // the face's open-eye aperture
 };
 
+/// The output's 1-euro filter, on yaw and pitch in degrees: a fixation is held
+/// still (cutoff 0.8 Hz), a saccade of hundreds of degrees a second passes in
+/// about a frame (beta 0.05 per deg/s; the speed itself low-passed at 5 Hz so it rises at once).
+const filter::OneEuroSettings kGazeSmoothing{0.8, 0.05, 5.0};
+
 struct GazeFaceState final : pipeline::StageState {
     std::array<EyeState, 2> eyes;  // the subject's left, right
-    GazeAngles angles{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
+    GazeAngles angles{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};  // the MAP estimate
     bool have_angles = false;
+    filter::OneEuroFilter smoothing{kGazeSmoothing};
+    Eigen::VectorXd sample = Eigen::VectorXd::Zero(4), output = Eigen::VectorXd::Zero(4);
     std::vector<float> centres_identity;  // the identity the eyeball centres were computed for
     bool have_centres = false;
-    std::array<Vec3, 2> centres;
+    std::array<Vec3, 2> centres;          // eyeball rotation centres on the identity's mesh (model frame)
+    std::array<std::array<Vec3, 2>, 2> corners;  // that mesh's outer and inner eye-corner vertices
+    std::array<Eigen::Vector3f, 2> offset{Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};  // landmark correction, model frame
+    bool have_offset = false;
     std::vector<Vec3> mesh;
 };
 
@@ -65,7 +76,11 @@ std::array<EyeShapes, 2> eyeShapes(const FaceModel& face) {
 class GazeStage final : public pipeline::Stage {
 public:
     GazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face)
-        : eyes_(std::move(eyes)), face_(std::move(face)), rigs_(EyeRig::both(*face_)), shapes_(eyeShapes(*face_)) {}
+        : eyes_(std::move(eyes)),
+          face_(std::move(face)),
+          rigs_(EyeRig::both(*face_)),
+          shapes_(eyeShapes(*face_)),
+          landmark_vertices_(face_->landmarkVertices()) {}
 
     StageInfo info() const override {
         return {"gaze", true, "eye patches, pixel and aperture forests, binocular MAP fit (" + eyes_->sourcePath() + ")"};
@@ -81,6 +96,8 @@ public:
         auto& s = static_cast<GazeFaceState&>(*state);
         for (auto& e : s.eyes) e.reference = eyes_->data().open_aperture;
         s.have_centres = false;
+        s.have_offset = false;
+        s.smoothing.reset();
     }
 
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
@@ -99,9 +116,11 @@ public:
         const EyeModelData& model = eyes_->data();
         std::array<EyeObservation, 2> seen;
         std::array<float, 2> ratio{}, openness{};
+        placeEyeballs(*r.landmarks, R, t, frame.camera, s);
         for (int e = 0; e < 2; ++e) {
             EyeState& eye = s.eyes[static_cast<std::size_t>(e)];
-            seen[e].centre = R * Eigen::Vector3f(s.centres[e].x, s.centres[e].y, s.centres[e].z) + t;
+            const Eigen::Vector3f c = Eigen::Vector3f(s.centres[e].x, s.centres[e].y, s.centres[e].z) + s.offset[e];
+            seen[e].centre = R * c + t;
             if (!cutEyePatch(frame.gray, *r.landmarks, e == 0 ? Eye::Left : Eye::Right, eye.patch)) continue;
             classify(model, eye);
             float aperture = 0.f;
@@ -119,16 +138,24 @@ public:
             seen[e].patch = &eye.patch;
             seen[e].iris = &eye.iris;
             seen[e].open = &eye.open;
-            seen[e].weight = std::clamp((openness[e] - 0.35f) / 0.3f, 0.f, 1.f);
+            // Only a clearly open eye is data: a closing lid covers the iris from above and would drag the gaze down.
+            seen[e].weight = std::clamp((openness[e] - 0.6f) / 0.25f, 0.f, 1.f);
         }
         const fit::Camera& camera = frame.camera;
+        // Both eyes closed: the output holds exactly (the filter is not fed, so it does not catch up meanwhile).
+        const bool seeing = seen[0].weight > 0.f || seen[1].weight > 0.f || !s.have_angles;
         s.angles = fitGaze(seen, R, camera, s.angles, s.have_angles);
         s.have_angles = true;
+        if (seeing) {
+            for (int k = 0; k < 4; ++k) s.sample[k] = s.angles[static_cast<std::size_t>(k / 2)][k % 2] / kDeg;
+            s.output = s.smoothing(s.sample, frame.dt);
+        }
+        const Eigen::VectorXd& smooth = s.output;
 
         GazeResult gaze;
         for (int e = 0; e < 2; ++e) {
             EyeGaze& out = e == 0 ? gaze.left : gaze.right;
-            const Eigen::Vector2f a = s.angles[static_cast<std::size_t>(e)];
+            const Eigen::Vector2f a(static_cast<float>(smooth[2 * e] * kDeg), static_cast<float>(smooth[2 * e + 1] * kDeg));
             const Eigen::Vector3f head = gazeDirection(a.x(), a.y());
             const Eigen::Vector3f cam = R * head;
             out.direction = {cam.x(), cam.y(), cam.z()};
@@ -151,7 +178,7 @@ private:
             float* iris = eye.iris.ptr<float>(y);
             float* open = eye.open.ptr<float>(y);
             for (int x = 0; x < kRegionW; ++x) {
-                model.pixels.evaluate(eye.patch.pixels, x + kClassifiedRegion.x0, y + kClassifiedRegion.y0, p);
+                model.pixels.evaluate(eye.patch.pixels, kClassifiedRegion.x(x), kClassifiedRegion.y(y), p);
                 iris[x] = p[kIris];
                 open[x] = p[kIris] + p[kSclera];
             }
@@ -165,9 +192,37 @@ private:
         for (int e = 0; e < 2; ++e) {
             const Eigen::Vector3f c = rotationCentre(e == 0 ? face_->leftEyeball() : face_->rightEyeball(), rigs_[e].centre(s.mesh));
             s.centres[e] = {c.x(), c.y(), c.z()};
+            const Eye eye = e == 0 ? Eye::Left : Eye::Right;
+            s.corners[e] = {s.mesh[static_cast<std::size_t>(landmark_vertices_[static_cast<std::size_t>(outerCorner(eye))])],
+                            s.mesh[static_cast<std::size_t>(landmark_vertices_[static_cast<std::size_t>(innerCorner(eye))])]};
         }
         s.centres_identity = r.identity;
         s.have_centres = true;
+    }
+
+    /// Ties each eyeball to the eye corners the landmarks see, not only to the
+    /// fitted mesh: the fit places the mesh as a compromise over all 68
+    /// landmarks, which can leave its eyes a few mm off the image's eyes. The
+    /// observed corners, back-projected at the mesh corners' depths, give where
+    /// the eye is; the difference to the mesh's corners (model frame) is
+    /// averaged over frames (a per-user refinement that does not follow landmark jitter).
+    void placeEyeballs(const Landmarks68& l, const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const fit::Camera& camera,
+                       GazeFaceState& s) const {
+        for (int e = 0; e < 2; ++e) {
+            const Eye eye = e == 0 ? Eye::Left : Eye::Right;
+            Eigen::Vector3f delta = Eigen::Vector3f::Zero();
+            for (int k = 0; k < 2; ++k) {
+                const Vec3& v = s.corners[e][static_cast<std::size_t>(k)];
+                const Eigen::Vector3f mesh = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
+                const Point2 p = l[static_cast<std::size_t>(k == 0 ? outerCorner(eye) : innerCorner(eye))];
+                const Eigen::Vector3f seen(static_cast<float>((p.x - camera.cx) / camera.fx) * mesh.z(),
+                                           static_cast<float>((p.y - camera.cy) / camera.fy) * mesh.z(), mesh.z());
+                delta += 0.5f * R.transpose() * (seen - mesh);
+            }
+            if (!delta.allFinite() || delta.norm() > 15.f) continue;  // a landmark far off: keep the last correction
+            s.offset[e] = s.have_offset ? Eigen::Vector3f(0.9f * s.offset[e] + 0.1f * delta) : delta;
+        }
+        s.have_offset = true;
     }
 
     void writeEyeShapes(FaceResult& r, const GazeResult& gaze, const std::array<float, 2>& ratio) const {
@@ -195,6 +250,7 @@ private:
     std::shared_ptr<const FaceModel> face_;
     std::array<EyeRig, 2> rigs_;
     std::array<EyeShapes, 2> shapes_;
+    std::vector<int> landmark_vertices_;
 };
 
 }  // namespace

@@ -1,0 +1,75 @@
+// The gaze stage alone, both eyes of one face (patches, pixel and aperture
+// forests, binocular fit), on a tracked 640x480 frame; and the whole tracking
+// frame with and without it, in the same run (bench_tracking.cpp's loop).
+
+#include "bench_support.hpp"
+
+#include "core/environment.hpp"
+#include "core/image.hpp"
+#include "gaze/gaze_stage.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+namespace facetrack::bench {
+namespace {
+
+void BM_Gaze_BothEyes(benchmark::State& state) {
+    const cv::Mat frame = clipFrame("liveportrait_d14_gaze_shifts.mp4", 40, 640, 480);
+    if (skipWithoutShared(state, frame)) return;
+    Models models = Models::loadDefault();
+    if (!models.eyes) {
+        state.SkipWithError("no eye model");
+        return;
+    }
+    Tracker tracker(models);
+    FrameResult result;
+    for (int i = 0; i < 5; ++i) tracker.process(core::viewOf(frame), i / 30.0, result);
+    if (result.faces.empty()) {
+        state.SkipWithError("no face in the frame");
+        return;
+    }
+    auto stage = gaze::makeGazeStage(models.eyes, models.face, true);
+    auto faceState = stage->newFaceState();
+    pipeline::FaceTrack face;
+    face.result = result.faces[0];
+    cv::Mat gray;
+    cv::cvtColor(frame, gray, cv::COLOR_BGR2GRAY);
+    fit::Camera camera;
+    camera.fx = result.camera.fx, camera.fy = result.camera.fy, camera.cx = result.camera.cx, camera.cy = result.camera.cy;
+    const pipeline::FrameInput input{core::viewOf(frame), gray, camera, 1.0 / 30.0};
+    for (auto _ : state) {
+        stage->run(input, face, faceState.get());
+        benchmark::DoNotOptimize(face.result.gaze);
+    }
+}
+BENCHMARK(BM_Gaze_BothEyes)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+/// The tracking-mode frame of d14 at 640x480, gaze on (the shipped models) or off (no eye model).
+void BM_TrackingFrame640x480_d14(benchmark::State& state) {
+    std::vector<cv::Mat> frames;
+    cv::VideoCapture video(core::sharedDirectory() + "/data/clips/liveportrait_d14_gaze_shifts.mp4");
+    for (cv::Mat frame, resized; frames.size() < 120 && video.read(frame);) {
+        cv::resize(frame, resized, cv::Size(640, 480));
+        frames.push_back(resized.clone());
+    }
+    if (skipWithoutShared(state, frames.empty() ? cv::Mat() : frames[0])) return;
+    Models models = Models::loadDefault();
+    if (state.range(0) == 0) models.eyes = nullptr;
+    Tracker tracker(models);
+    FrameResult result;
+    std::size_t t = 0;
+    for (; t < frames.size(); ++t) tracker.process(core::viewOf(frames[t]), t / 30.0, result);
+    for (auto _ : state) {
+        const std::size_t i = t % (2 * frames.size());
+        const std::size_t index = i < frames.size() ? i : 2 * frames.size() - 1 - i;
+        tracker.process(core::viewOf(frames[index]), t / 30.0, result);
+        ++t;
+    }
+    state.SetLabel(state.range(0) ? "gaze on" : "gaze off");
+}
+BENCHMARK(BM_TrackingFrame640x480_d14)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+}  // namespace
+}  // namespace facetrack::bench

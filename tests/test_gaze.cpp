@@ -1,0 +1,345 @@
+// The gaze stage: eye patches, forests, the model file, the MAP fit on ideal
+// maps, and the whole stage on synthetic renders of known gaze (blink, wink,
+// both eyes closed, an eye at the frame's border).
+
+#include "common/synthetic_face.hpp"
+#include "gaze/eye_model_data.hpp"
+#include "gaze/eye_patch.hpp"
+#include "gaze/forest_training.hpp"
+#include "gaze/gaze_fit.hpp"
+#include "gaze/gaze_stage.hpp"
+
+#include "core/image.hpp"
+#include "facetrack/facetrack.hpp"
+#include "test_support.hpp"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <cstring>
+#include <fstream>
+
+namespace facetrack {
+namespace {
+
+using namespace gaze;
+constexpr float kDeg = 3.14159265f / 180.f;
+/// On single renders of a frontal face. The target is 3 degrees mean;
+/// the pixel forest's maps on renders give about 8 (docs/benchmarks.md, "Eyes"),
+/// so this bound catches breakage (a flipped axis is tens of degrees), not the target.
+constexpr double kRenderGazeToleranceDeg = 15.0;
+
+#define FACETRACK_REQUIRE_EYE_MODEL()                                                        \
+    do {                                                                                     \
+        if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm"))           \
+            GTEST_SKIP() << "models/eye_model.ftm is missing (build/tools/train_eyes makes it)"; \
+    } while (0)
+
+TEST(EyePatch, PutsTheCornersAtFixedPointsAndMirrorsTheLeftEye) {
+    cv::Mat gray(200, 300, CV_8U, cv::Scalar(100));
+    cv::circle(gray, {120, 90}, 3, cv::Scalar(250), -1);  // a bright dot near the outer corner of a right eye
+    EyePatch p;
+    ASSERT_TRUE(cutEyePatch(gray, {110, 92}, {150, 84}, false, p));
+    const Point2 outer = toPatch(p, {110, 92}), inner = toPatch(p, {150, 84});
+    EXPECT_NEAR(outer.x, kOuterX, 1e-3f);
+    EXPECT_NEAR(outer.y, kCornerY, 1e-3f);
+    EXPECT_NEAR(inner.x, kInnerX, 1e-3f);
+    EXPECT_NEAR(inner.y, kCornerY, 1e-3f);
+    const Point2 back = toImage(p, toPatch(p, {123.f, 77.f}));
+    EXPECT_NEAR(back.x, 123.f, 1e-3f);
+    EXPECT_NEAR(back.y, 77.f, 1e-3f);
+    // Normalised: zero mean; the dot is bright and on the outer (left) side.
+    EXPECT_NEAR(cv::mean(p.pixels)[0], 0.0, 1e-4);
+    cv::Point brightest;
+    cv::minMaxLoc(p.pixels, nullptr, nullptr, nullptr, &brightest);
+    EXPECT_LT(brightest.x, kPatchWidth / 2);
+    // The subject's left eye (outer corner on the image's right) is mirrored: its outer corner lands on the left too.
+    EXPECT_TRUE(cutEyePatch(gray, {150, 84}, {110, 92}, true, p));
+    EXPECT_NEAR(toPatch(p, {150, 84}).x, kOuterX, 1e-3f);
+    EXPECT_LT(p.patch_from_image(0, 0) * p.patch_from_image(1, 1) - p.patch_from_image(0, 1) * p.patch_from_image(1, 0), 0.f);
+    // No eye to cut.
+    EXPECT_FALSE(cutEyePatch(gray, {110, 92}, {110.5f, 92}, false, p));
+    EXPECT_FALSE(cutEyePatch(gray, {NAN, 92}, {150, 84}, false, p));
+    // An eye at the frame's border: the border repeats, nothing is read outside.
+    EXPECT_TRUE(cutEyePatch(gray, {-20, 5}, {15, -3}, false, p));
+    EXPECT_TRUE(cv::checkRange(p.pixels));
+}
+
+TEST(PatchForest, TrainingLearnsAPixelRuleAndEvaluatesIt) {
+    // Class 1 where the pixel is brighter than its right neighbour, else 0.
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    std::vector<cv::Mat> patches;
+    std::vector<PatchSample> samples;
+    std::vector<float> targets;
+    for (int p = 0; p < 40; ++p) {
+        cv::Mat m(kPatchHeight, kPatchWidth, CV_32F);
+        for (int y = 0; y < m.rows; ++y)
+            for (int x = 0; x < m.cols; ++x) m.at<float>(y, x) = u(rng);
+        patches.push_back(m);
+        for (int k = 0; k < 200; ++k) {
+            const int x = static_cast<int>((u(rng) + 1.f) * 18.f) + 1, y = static_cast<int>((u(rng) + 1.f) * 12.f) + 1;
+            samples.push_back({p, x, y});
+            const bool brighter = m.at<float>(y, x) > m.at<float>(y, x + 1);
+            targets.push_back(brighter ? 0.f : 1.f);
+            targets.push_back(brighter ? 1.f : 0.f);
+        }
+    }
+    ForestTrainingOptions o;
+    o.trees = 4;
+    o.depth = 3;
+    o.candidates = 300;
+    o.draw = [](std::mt19937& r) {
+        std::uniform_int_distribution<int> d(-2, 2);
+        PatchFeature f;
+        f.ax = static_cast<std::int8_t>(d(r)), f.ay = static_cast<std::int8_t>(d(r));
+        f.bx = static_cast<std::int8_t>(d(r)), f.by = static_cast<std::int8_t>(d(r));
+        return f;
+    };
+    const PatchForest forest = trainPatchForest(patches, samples, targets, 2, o);
+    EXPECT_NO_THROW(forest.validate("test forest"));
+    EXPECT_EQ(forest.treeCount(), 4);
+    int correct = 0;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        float p[2];
+        forest.evaluate(patches[static_cast<std::size_t>(samples[i].patch)], samples[i].x, samples[i].y, p);
+        EXPECT_NEAR(p[0] + p[1], 1.f, 1e-4f);
+        correct += (p[1] > p[0]) == (targets[2 * i + 1] > 0.5f);
+    }
+    EXPECT_GT(correct, static_cast<int>(0.97 * samples.size()));
+    EXPECT_THROW(trainPatchForest(patches, {}, {}, 2, o), Error);
+}
+
+TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
+    FACETRACK_REQUIRE_EYE_MODEL();
+    const std::string shipped = test::sourceDir() + "/models/eye_model.ftm";
+    const EyeModelData m = readEyeModel(shipped);
+    EXPECT_EQ(m.pixels.outputs, kPixelClasses);
+    EXPECT_GT(m.open_aperture, m.closed_aperture);
+    EXPECT_FALSE(m.provenance.empty());
+    const std::string copy = test::tempPath("eyes.ftm");
+    writeEyeModel(copy, m);
+    const EyeModelData back = readEyeModel(copy);
+    EXPECT_EQ(back.pixels.leaves, m.pixels.leaves);
+    EXPECT_EQ(back.aperture.leaves, m.aperture.leaves);
+    ASSERT_EQ(back.pixels.splits.size(), m.pixels.splits.size());
+    EXPECT_EQ(0, std::memcmp(back.pixels.splits.data(), m.pixels.splits.data(), m.pixels.splits.size() * sizeof(PatchFeature)));
+    EXPECT_EQ(back.open_aperture, m.open_aperture);
+    EXPECT_EQ(back.closed_aperture, m.closed_aperture);
+    EXPECT_EQ(back.provenance, m.provenance);
+
+    const auto expectError = [&](const std::string& path, const std::string& words) {
+        try {
+            EyeModel::load(path);
+            ADD_FAILURE() << "a damaged eye model loaded";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+        }
+    };
+    {
+        std::fstream f(copy, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(1000);
+        f.put('\x55');
+    }
+    expectError(copy, "checksum");
+    std::filesystem::resize_file(copy, 500);
+    expectError(copy, "truncated");
+    expectError(test::tempPath("no_such_eyes.ftm"), "eye model");
+    EyeModelData bad = m;
+    bad.pixels.leaves.pop_back();
+    EXPECT_THROW(writeEyeModel(copy, bad), Error);
+    bad = m;
+    bad.closed_aperture = bad.open_aperture + 0.1f;
+    EXPECT_THROW(writeEyeModel(copy, bad), Error);
+    std::filesystem::remove(copy);
+}
+
+/// An eye observed perfectly: the classifier's maps drawn from the model itself at `angles`.
+struct IdealEye {
+    EyePatch patch;
+    cv::Mat iris = cv::Mat(kClassifiedRegion.rows(), kClassifiedRegion.columns(), CV_32F);
+    cv::Mat open = cv::Mat(iris.size(), CV_32F, cv::Scalar(1.f));
+    EyeObservation seen;
+};
+
+void drawIdeal(IdealEye& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles) {
+    ProjectedIris p;
+    ASSERT_TRUE(projectIris(eye.seen, R, camera, angles, p));
+    Eigen::Matrix2f axes;
+    axes << p.axis1, p.axis2;
+    const Eigen::Matrix2f inverse = axes.inverse();
+    for (int y = 0; y < eye.iris.rows; ++y)
+        for (int x = 0; x < eye.iris.cols; ++x) {
+            const Eigen::Vector2f q(static_cast<float>(kClassifiedRegion.x(x)), static_cast<float>(kClassifiedRegion.y(y)));
+            eye.iris.at<float>(y, x) = (inverse * (q - p.centre)).norm() < 1.f ? 1.f : 0.f;
+        }
+}
+
+TEST(GazeFit, RecoversKnownGazeFromIdealMapsAndHoldsWhenBothEyesClose) {
+    // A face 500 mm away, turned 15 degrees, eyes 31 mm either side of the middle.
+    const Eigen::Matrix3f R =
+        (Eigen::Quaternionf(0, 1, 0, 0) * Eigen::AngleAxisf(15 * kDeg, Eigen::Vector3f::UnitY())).toRotationMatrix();
+    const Eigen::Vector3f t(0, 0, 500);
+    fit::Camera camera;
+    camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
+    const cv::Mat gray(480, 640, CV_8U, cv::Scalar(128));
+    std::array<IdealEye, 2> eyes;
+    for (int e = 0; e < 2; ++e) {
+        IdealEye& eye = eyes[static_cast<std::size_t>(e)];
+        const float side = e == 0 ? 1.f : -1.f;
+        eye.seen.centre = R * Eigen::Vector3f(side * 31.f, 35.f, 70.f) + t;
+        // Corners 14 mm either side of the eye, in front of the eyeball.
+        const auto project = [&](const Eigen::Vector3f& head) {
+            const Eigen::Vector3f c = R * head + t;
+            return Point2{static_cast<float>(camera.fx * c.x() / c.z() + camera.cx), static_cast<float>(camera.fy * c.y() / c.z() + camera.cy)};
+        };
+        const Point2 outer = project({side * 45.f, 35.f, 78.f}), inner = project({side * 17.f, 35.f, 78.f});
+        ASSERT_TRUE(cutEyePatch(gray, outer, inner, e == 0, eye.patch));
+        eye.seen.patch = &eye.patch;
+        eye.seen.iris = &eye.iris;
+        eye.seen.open = &eye.open;
+        eye.seen.weight = 1.f;
+    }
+    const std::array<std::array<float, 2>, 4> cases = {{{0, 0}, {18, -6}, {-20, 12}, {8, -15}}};
+    for (const auto& c : cases) {
+        // A shared fixation: the right eye 3 degrees more to the left (vergence).
+        const GazeAngles truth{Eigen::Vector2f((c[0] - 1.5f) * kDeg, c[1] * kDeg), Eigen::Vector2f((c[0] + 1.5f) * kDeg, c[1] * kDeg)};
+        for (int e = 0; e < 2; ++e) drawIdeal(eyes[static_cast<std::size_t>(e)], R, camera, truth[static_cast<std::size_t>(e)]);
+        const GazeAngles got = fitGaze({eyes[0].seen, eyes[1].seen}, R, camera, {}, false);
+        for (int e = 0; e < 2; ++e) {
+            // Within 2 degrees: the maps are sampled on a 2-pixel grid, and the priors pull a little.
+            EXPECT_NEAR(got[e].x() / kDeg, truth[e].x() / kDeg, 2.0) << "yaw, eye " << e << ", case " << c[0] << " " << c[1];
+            EXPECT_NEAR(got[e].y() / kDeg, truth[e].y() / kDeg, 2.0) << "pitch, eye " << e;
+        }
+        // One eye closed: it follows the other.
+        auto closedLeft = eyes[0].seen;
+        closedLeft.weight = 0.f;
+        const GazeAngles wink = fitGaze({closedLeft, eyes[1].seen}, R, camera, got, true);
+        EXPECT_NEAR(wink[1].x(), got[1].x(), 1.5f * kDeg);
+        EXPECT_NEAR(wink[0].y(), got[1].y(), 2.f * kDeg);
+        // Both closed: the gaze holds where it was, finite.
+        auto closedRight = eyes[1].seen;
+        closedRight.weight = 0.f;
+        const GazeAngles held = fitGaze({closedLeft, closedRight}, R, camera, got, true);
+        for (int e = 0; e < 2; ++e) {
+            EXPECT_TRUE(held[e].allFinite());
+            EXPECT_EQ(held[e], got[e]);
+        }
+    }
+}
+
+TEST(GazeWeights, BlinkAndWideFromOpenness) {
+    EXPECT_EQ(blinkWeight(1.f), 0.f);
+    EXPECT_EQ(blinkWeight(0.f), 1.f);
+    EXPECT_NEAR(blinkWeight(0.525f), 0.5f, 1e-5f);
+    EXPECT_EQ(wideWeight(1.f), 0.f);
+    EXPECT_NEAR(wideWeight(1.25f), 0.5f, 1e-5f);
+}
+
+/// The synthetic renderer's face, tracked from its own landmarks' box with the renderer's camera.
+class GazeOnRenders : public ::testing::Test {
+protected:
+    void SetUp() override {
+        if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm") ||
+            !std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm"))
+            GTEST_SKIP() << "models/eye_model.ftm or landmarks_lbf.ftm missing";
+        models_ = Models::loadDefault();
+        renderer_ = std::make_unique<tools::SyntheticRenderer>(models_.face);
+        TrackerConfig config;
+        config.camera.focal_length_px = tools::SyntheticFace{}.fx;
+        tracker_ = std::make_unique<Tracker>(models_, config);
+    }
+    tools::SyntheticFace face(float gazeYaw, float gazePitch, float blinkLeft = 0.f, float blinkRight = 0.f) const {
+        tools::SyntheticFace f;
+        f.rotation = {0.f, 1.f, 0.f, 0.f};               // facing the camera
+        f.translation_mm = {0, 0, f.fx * 62.3f / 90.f};  // inter-ocular distance 90 px
+        f.gaze_deg = {{{gazeYaw - 1.5f, gazePitch}, {gazeYaw + 1.5f, gazePitch}}};
+        const auto& names = models_.face->expressionNames();
+        f.expression.assign(names.size(), 0.f);
+        const auto set = [&](const char* n, float w) {
+            f.expression[static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin())] = w;
+        };
+        set("eyeBlink_L", blinkLeft);
+        set("eyeBlink_R", blinkRight);
+        return f;
+    }
+    FrameResult track(const tools::SyntheticFace& f, double t) {
+        const cv::Mat image = renderer_->render(f);
+        FrameResult result;
+        tracker_->process(core::viewOf(image), t, {renderer_->faceBox(f)}, result);
+        return result;
+    }
+    static double angleDeg(const Vec3& a, const Vec3& b) {
+        return std::acos(std::clamp(static_cast<double>(a.x * b.x + a.y * b.y + a.z * b.z), -1.0, 1.0)) / kDeg;
+    }
+    Models models_;
+    std::unique_ptr<tools::SyntheticRenderer> renderer_;
+    std::unique_ptr<Tracker> tracker_;
+};
+
+TEST_F(GazeOnRenders, RecoversKnownGaze) {
+    double worst = 0.0;
+    for (const auto& g : std::vector<std::array<float, 2>>{{0, 0}, {15, 0}, {-15, 5}, {0, -12}}) {
+        tracker_->reset();
+        const tools::SyntheticFace f = face(g[0], g[1]);
+        const FrameResult r = track(f, 0.0);
+        ASSERT_EQ(r.faces.size(), 1u);
+        ASSERT_TRUE(r.faces[0].gaze);
+        for (int e = 0; e < 2; ++e) {
+            const EyeGaze& est = e == 0 ? r.faces[0].gaze->left : r.faces[0].gaze->right;
+            const double error = angleDeg(est.direction, renderer_->gazeInCamera(f, e));
+            worst = std::max(worst, error);
+            EXPECT_LT(error, kRenderGazeToleranceDeg) << "gaze " << g[0] << " " << g[1] << ", eye " << e;
+            EXPECT_GT(est.openness, 0.7f);
+        }
+    }
+    std::printf("worst angular error on 4 renders: %.2f deg\n", worst);
+}
+
+TEST_F(GazeOnRenders, AWinkIsOneEyeAndBothClosedHoldTheGaze) {
+    tracker_->reset();
+    const FrameResult open = track(face(10, 0), 0.0);
+    ASSERT_EQ(open.faces.size(), 1u);
+    ASSERT_TRUE(open.faces[0].gaze);
+    const FrameResult wink = track(face(10, 0, 1.f, 0.f), 1 / 30.0);
+    ASSERT_EQ(wink.faces.size(), 1u);
+    const GazeResult& w = *wink.faces[0].gaze;
+    EXPECT_LT(w.left.openness, 0.4f);
+    EXPECT_GE(w.right.openness, 0.7f);
+    const auto& arkit = wink.faces[0].expression->arkit;
+    EXPECT_GE(arkit[static_cast<std::size_t>(arkitIndex("eyeBlinkLeft"))], 0.5f);
+    EXPECT_LT(arkit[static_cast<std::size_t>(arkitIndex("eyeBlinkRight"))], 0.5f);
+    // The open eye does not veer off while the other is closed (beyond the fixation's own noise, ~1.5 degrees).
+    EXPECT_LT(angleDeg(w.right.direction_head, open.faces[0].gaze->right.direction_head), 4.0);
+    // Both closed: each eye's gaze holds where it was, finite.
+    const FrameResult closed = track(face(10, 0, 1.f, 1.f), 2 / 30.0);
+    ASSERT_EQ(closed.faces.size(), 1u);
+    const GazeResult& c = *closed.faces[0].gaze;
+    EXPECT_LT(c.left.openness, 0.4f);
+    EXPECT_LT(c.right.openness, 0.4f);
+    for (const auto& [now, before] : {std::pair{c.left, w.left}, std::pair{c.right, w.right}}) {
+        EXPECT_TRUE(std::isfinite(now.yaw_deg) && std::isfinite(now.pitch_deg));
+        EXPECT_LT(angleDeg(now.direction_head, before.direction_head), 0.5) << "the gaze moved while the eyes were closed";
+    }
+}
+
+TEST_F(GazeOnRenders, AnEyeAtTheFramesBorderGivesFiniteValues) {
+    tracker_->reset();
+    tools::SyntheticFace f = face(0, 0);
+    f.translation_mm.x = -f.translation_mm.z * (f.cx - 15.f) / f.fx;  // the face's right eye at the left edge
+    const FrameResult r = track(f, 0.0);
+    for (const FaceResult& face : r.faces) {
+        if (!face.gaze) continue;
+        for (const EyeGaze* g : {&face.gaze->left, &face.gaze->right}) {
+            EXPECT_TRUE(std::isfinite(g->yaw_deg) && std::isfinite(g->pitch_deg) && std::isfinite(g->openness));
+            EXPECT_TRUE(std::isfinite(g->pupil_px.x) && std::isfinite(g->pupil_px.y));
+        }
+    }
+}
+
+}  // namespace
+}  // namespace facetrack
