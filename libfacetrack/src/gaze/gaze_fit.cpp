@@ -57,11 +57,7 @@ void dataResiduals(const EyeObservation& eye, const Eigen::Matrix3f& R, const fi
     }
 }
 
-void residuals(const std::array<EyeObservation, 2>& eyes, const Eigen::Matrix3f& R, const fit::Camera& camera, const GazeAngles& a,
-               const GazeAngles& previous, bool havePrevious, const GazeFitSettings& s, Eigen::VectorXf& r) {
-    for (int e = 0; e < 2; ++e)
-        dataResiduals(eyes[e], R, camera, a[e], std::sqrt(eyes[e].weight) / s.data_sigma, r.data() + e * kDataResiduals);
-    float* p = r.data() + 2 * kDataResiduals;
+void priorResiduals(const GazeAngles& a, const GazeAngles& previous, bool havePrevious, const GazeFitSettings& s, float* p) {
     p[0] = (a[0].y() - a[1].y()) / (s.pitch_sigma_deg * kDeg);
     p[1] = (a[1].x() - a[0].x() - s.vergence_deg * kDeg) / (s.vergence_sigma_deg * kDeg);
     for (int e = 0; e < 2; ++e) {
@@ -154,12 +150,19 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
     thread_local Eigen::VectorXf r0(kResiduals), r1(kResiduals);
     thread_local Eigen::MatrixXf J(kResiduals, 4);
     constexpr float h = 0.25f * kDeg;
+    std::array<float, 2> scale;
+    for (int e = 0; e < 2; ++e) scale[e] = std::sqrt(eyes[e].weight) / s.data_sigma;
     for (int it = 0; it < s.iterations; ++it) {
-        residuals(eyes, R, camera, a, previous, havePrevious, s, r0);
+        for (int e = 0; e < 2; ++e) dataResiduals(eyes[e], R, camera, a[e], scale[e], r0.data() + e * kDataResiduals);
+        priorResiduals(a, previous, havePrevious, s, r0.data() + 2 * kDataResiduals);
+        // A parameter of one eye moves only that eye's data residuals (and the priors).
         for (int k = 0; k < 4; ++k) {
+            const int e = k / 2;
             GazeAngles b = a;
-            b[k / 2][k % 2] += h;
-            residuals(eyes, R, camera, b, previous, havePrevious, s, r1);
+            b[e][k % 2] += h;
+            r1 = r0;
+            dataResiduals(eyes[e], R, camera, b[e], scale[e], r1.data() + e * kDataResiduals);
+            priorResiduals(b, previous, havePrevious, s, r1.data() + 2 * kDataResiduals);
             J.col(k) = (r1 - r0) / h;
         }
         const Eigen::Matrix4f H = J.transpose() * J + 1e-4f * Eigen::Matrix4f::Identity();
