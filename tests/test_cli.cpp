@@ -134,5 +134,24 @@ TEST(Cli, HelpExitsZero) {
     EXPECT_EQ(runCli("track --help").exit_code, 0);
 }
 
+TEST(Cli, EvalExpressionsReportsNeutralAndResponsesAndRejectsBadLabels) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string plots = test::tempPath("expr");
+    const CliRun run = runCli("eval-expressions liveportrait_d0_greenscreen_gaze_smile.mp4 --no-mirror --plot '" + plots + "'");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.out.find("neutral ("), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("smile       ("), std::string::npos) << run.out;
+    EXPECT_TRUE(std::filesystem::exists(plots + "_neutral.png"));
+    EXPECT_TRUE(std::filesystem::exists(plots + "_liveportrait_d0_greenscreen_gaze_smile.png"));
+    std::filesystem::remove(plots + "_neutral.png");
+    std::filesystem::remove(plots + "_liveportrait_d0_greenscreen_gaze_smile.png");
+    const std::string bad = test::tempPath("labels.csv");
+    std::ofstream(bad) << "clip,first,last,label\nliveportrait_d0_greenscreen_gaze_smile.mp4,0,5,grin\n";
+    const CliRun rejected = runCli("eval-expressions --labels '" + bad + "'");
+    EXPECT_EQ(rejected.exit_code, 1);
+    EXPECT_NE(rejected.err.find("unknown label 'grin'"), std::string::npos) << rejected.err;
+    std::filesystem::remove(bad);
+}
+
 }  // namespace
 }  // namespace facetrack

@@ -414,13 +414,22 @@ TEST(OpenSeeFace, PacketLayoutAndValuesMatchTheTracker) {
         EXPECT_NEAR(tx * kOpenSeeFaceUnitMm, face.pose->translation_mm.y, 1e-2f);
         EXPECT_NEAR(ty * kOpenSeeFaceUnitMm, face.pose->translation_mm.x, 1e-2f);
         EXPECT_NEAR(tz * kOpenSeeFaceUnitMm, face.pose->translation_mm.z, 1e-2f);
-        for (int i = 0; i < 68; ++i) EXPECT_EQ(read<float>(d, at), i < 66 ? face.confidence : 0.f);
+        for (int i = 0; i < 66; ++i) EXPECT_EQ(read<float>(d, at), face.confidence);
+        EXPECT_EQ(read<float>(d, at), face.gaze ? face.gaze->right.openness : 0.f);
+        EXPECT_EQ(read<float>(d, at), face.gaze ? face.gaze->left.openness : 0.f);
         for (int i = 0; i < 66; ++i) {
             const Point2 p = (*face.landmarks)[static_cast<std::size_t>(kOpenSeeFaceFromIbug[static_cast<std::size_t>(i)])];
             EXPECT_EQ(read<float>(d, at), p.x);
             EXPECT_EQ(read<float>(d, at), p.y);
         }
-        at += 2 * 2 * sizeof(float);  // the pupils: eye centres until gaze gives them
+        if (face.gaze) {  // the pupils, right then left
+            EXPECT_EQ(read<float>(d, at), face.gaze->right.pupil_px.x);
+            EXPECT_EQ(read<float>(d, at), face.gaze->right.pupil_px.y);
+            EXPECT_EQ(read<float>(d, at), face.gaze->left.pupil_px.x);
+            EXPECT_EQ(read<float>(d, at), face.gaze->left.pupil_px.y);
+        } else {
+            at += 2 * 2 * sizeof(float);
+        }
         std::vector<Eigen::Vector3f> points(70);
         for (auto& p : points) p = {read<float>(d, at), read<float>(d, at), read<float>(d, at)};
         EXPECT_LT(points[30].head<2>().norm(), 1e-5f);  // the nose tip at x = y = 0

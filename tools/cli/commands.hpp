@@ -22,6 +22,7 @@ int runBench(const std::vector<std::string>& argv);
 int runEvalTrack(const std::vector<std::string>& argv);
 int runSend(const std::vector<std::string>& argv);
 int runEvalGaze(const std::vector<std::string>& argv);
+int runEvalExpressions(const std::vector<std::string>& argv);
 
 // The tools' shared pieces, by their short names.
 using tools::Args;

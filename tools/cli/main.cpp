@@ -18,6 +18,7 @@ commands:
   bench CLIP                         tracker fps and per-stage ms (mean/p50/p99), per-frame plot
   eval-track CLIP...                 tracked share, jitter with/without filter, against dlib
   eval-gaze [--clips CLIP,...]       gaze and blink against teacher labels and synthetic renders
+  eval-expressions [CLIP...]         ARKit weights on hand-labelled segments: neutral bias, responses
   send --camera DEV|--input CLIP --protocol vmc|ifacialmocap|openseeface [--to HOST:PORT]
                                      stream to an avatar app (VSeeFace, VNyan, Warudo, ...)
   landmarks IMAGE|DIR|CLIP [--box x0,y0,x1,y1]   68 landmarks per face, as JSON lines
@@ -40,7 +41,7 @@ int main(int argc, char** argv) {
         {"info", runInfo},         {"detect", runDetect},           {"track", runTrack},
         {"landmarks", runLandmarks}, {"eval-detect", runEvalDetect}, {"eval-landmarks", runEvalLandmarks},
         {"bench", runBench},       {"eval-track", runEvalTrack}, {"send", runSend},
-        {"eval-gaze", runEvalGaze}};
+        {"eval-gaze", runEvalGaze}, {"eval-expressions", runEvalExpressions}};
     if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
         std::fputs(kUsage, argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;

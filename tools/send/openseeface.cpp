@@ -98,11 +98,15 @@ void OpenSeeFaceEncoder::encode(const FrameResult& frame, double time, std::vect
         w.f(pose.translation_mm.x / kOpenSeeFaceUnitMm);
         w.f(pose.translation_mm.z / kOpenSeeFaceUnitMm);
 
-        // Confidences: the face's for the 66 points; 0 for the pupils until gaze gives them.
+        // Confidences: the face's for the 66 points; the pupils' is the eye's openness (0 without gaze).
         for (int i = 0; i < 66; ++i) w.f(face.confidence);
-        for (int i = 0; i < 2; ++i) w.f(0.f);
+        w.f(face.gaze ? face.gaze->right.openness : 0.f);
+        w.f(face.gaze ? face.gaze->left.openness : 0.f);
         for (const int i : kOpenSeeFaceFromIbug) w.f(lm[static_cast<std::size_t>(i)].x), w.f(lm[static_cast<std::size_t>(i)].y);
-        for (const Point2 p : {eyeCentre(lm, 36), eyeCentre(lm, 42)}) w.f(p.x), w.f(p.y);
+        // 66, 67: the right and left pupils (the eye centres without gaze).
+        const Point2 rightPupil = face.gaze ? face.gaze->right.pupil_px : eyeCentre(lm, 36);
+        const Point2 leftPupil = face.gaze ? face.gaze->left.pupil_px : eyeCentre(lm, 42);
+        for (const Point2 p : {rightPupil, leftPupil}) w.f(p.x), w.f(p.y);
 
         // 3D points in the head frame, OpenSeeFace's axes and units, the nose
         // tip at x = y = 0, written as (x, -y, -z) as facetracker.py does.
@@ -115,12 +119,13 @@ void OpenSeeFaceEncoder::encode(const FrameResult& frame, double time, std::vect
         };
         for (const int i : kOpenSeeFaceFromIbug) put3(mesh_[static_cast<std::size_t>(landmark_vertices_[static_cast<std::size_t>(i)])]);
         const EyeballGeometry right = model_->rightEyeball(), left = model_->leftEyeball();
-        const auto pupil = [](const EyeballGeometry& e) {
-            return Vec3{e.centre.x + e.radius_mm * e.optical_axis.x, e.centre.y + e.radius_mm * e.optical_axis.y,
-                        e.centre.z + e.radius_mm * e.optical_axis.z};
+        // The pupil on the eyeball's surface, along the gaze (head frame) or the rest axis.
+        const auto pupil = [](const EyeballGeometry& e, const EyeGaze* g) {
+            const Vec3 d = g ? g->direction_head : e.optical_axis;
+            return Vec3{e.centre.x + e.radius_mm * d.x, e.centre.y + e.radius_mm * d.y, e.centre.z + e.radius_mm * d.z};
         };
-        put3(pupil(right));
-        put3(pupil(left));
+        put3(pupil(right, face.gaze ? &face.gaze->right : nullptr));
+        put3(pupil(left, face.gaze ? &face.gaze->left : nullptr));
         put3(right.centre);
         put3(left.centre);
 

@@ -1,0 +1,305 @@
+// facetrack eval-expressions: the ARKit weights on hand-labelled segments of
+// clips (data/expression_labels.csv): the bias on neutral faces, the response
+// to each labelled expression, mirror consistency and drift with head yaw.
+
+#include "commands.hpp"
+#include "plot.hpp"
+
+#include "app/image_view.hpp"
+#include "core/environment.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace facetrack::cli {
+
+namespace {
+
+const char* kUsage = R"(usage: facetrack eval-expressions [CLIP...] [--labels CSV] [--plot PREFIX] [--no-mirror] [tracker options]
+The ARKit-52 weights on hand-labelled segments (default data/expression_labels.csv, clips from
+../shared/data/clips; with no CLIP, every clip the labels name):
+  neutral   per shape, the mean over neutral segments (eyeLook shapes excluded from the worst)
+  response  per labelled expression, the mean of its shapes minus their neutral mean
+  mirror    mean |left shape (image) - right shape (mirrored image)| over all frames
+  yaw       the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg), the largest change
+Writes PREFIX_neutral.png (per-shape bars) and PREFIX_<clip>.png (time series of the expected
+shapes, labelled segments as steps); PREFIX defaults to expressions.)";
+
+struct Segment {
+    std::string clip;
+    int first = 0, last = 0;
+    std::string label;
+};
+
+/// The ARKit shapes each label should move.
+const std::map<std::string, std::vector<std::string>>& expectedShapes() {
+    static const std::map<std::string, std::vector<std::string>> shapes = {
+        {"smile", {"mouthSmileLeft", "mouthSmileRight"}},
+        {"open_mouth", {"jawOpen"}},
+        {"pucker", {"mouthPucker"}},
+        {"funnel", {"mouthFunnel"}},
+        {"brows_up", {"browInnerUp", "browOuterUpLeft", "browOuterUpRight"}},
+        {"frown", {"browDownLeft", "browDownRight"}},
+        {"cheek_puff", {"cheekPuff"}},
+        {"blink", {"eyeBlinkLeft", "eyeBlinkRight"}},
+        {"wink_left", {"eyeBlinkLeft"}},
+        {"wink_right", {"eyeBlinkRight"}},
+        {"tongue", {"tongueOut"}},
+    };
+    return shapes;
+}
+
+std::vector<Segment> readLabels(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw Error("cannot read labels '" + path + "'");
+    std::vector<Segment> segments;
+    std::string line;
+    int number = 0;
+    while (std::getline(in, line)) {
+        ++number;
+        if (line.empty() || line[0] == '#' || line.rfind("clip,", 0) == 0) continue;
+        std::stringstream s(line);
+        Segment seg;
+        std::string first, last;
+        if (!std::getline(s, seg.clip, ',') || !std::getline(s, first, ',') || !std::getline(s, last, ',') ||
+            !std::getline(s, seg.label))
+            throw Error(path + ":" + std::to_string(number) + ": expected clip,first,last,label");
+        seg.first = std::stoi(first);
+        seg.last = std::stoi(last);
+        if (seg.label != "neutral" && !expectedShapes().count(seg.label))
+            throw Error(path + ":" + std::to_string(number) + ": unknown label '" + seg.label + "'");
+        segments.push_back(seg);
+    }
+    return segments;
+}
+
+struct Track {
+    std::vector<std::optional<std::array<float, kArkitBlendshapeCount>>> arkit;
+    std::vector<float> yaw;
+};
+
+Track trackClip(const std::string& path, const TrackerConfig& config, bool mirrored) {
+    cv::VideoCapture video(path);
+    if (!video.isOpened()) throw Error("cannot open clip " + path);
+    Tracker tracker(Models::loadDefault(), config);
+    Track t;
+    cv::Mat bgr;
+    FrameResult result;
+    for (int f = 0; video.read(bgr); ++f) {
+        if (mirrored) cv::flip(bgr, bgr, 1);
+        tracker.process(tools::viewOf(bgr), f / 30.0, result);
+        if (!result.faces.empty() && result.faces[0].expression) {
+            t.arkit.push_back(result.faces[0].expression->arkit);
+            t.yaw.push_back(result.faces[0].pose ? result.faces[0].pose->euler_deg.y : 0.f);
+        } else {
+            t.arkit.push_back(std::nullopt);
+            t.yaw.push_back(0.f);
+        }
+    }
+    return t;
+}
+
+std::size_t idx(const std::string& name) { return static_cast<std::size_t>(arkitIndex(name)); }
+
+/// The name of the ARKit shape mirroring `name` (Left <-> Right).
+std::string mirrorName(const std::string& name) {
+    for (const auto& [a, b] : {std::pair<std::string, std::string>{"Left", "Right"}, {"Right", "Left"}}) {
+        const auto at = name.rfind(a);
+        if (at != std::string::npos && at + a.size() == name.size()) return name.substr(0, at) + b;
+    }
+    if (name == "mouthLeft") return "mouthRight";
+    if (name == "mouthRight") return "mouthLeft";
+    if (name == "jawLeft") return "jawRight";
+    if (name == "jawRight") return "jawLeft";
+    return name;
+}
+
+void barPlot(const std::string& path, const std::array<double, kArkitBlendshapeCount>& values, const std::string& title) {
+    const int w = 1200, h = 420, left = 40, bottom = 150, top = 30;
+    cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+    cv::putText(img, title, {left, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    const double scale = (h - bottom - top) / 1.0;
+    for (int t = 0; t <= 10; ++t) {
+        const int y = h - bottom - static_cast<int>(t * 0.1 * scale);
+        cv::line(img, {left, y}, {w - 10, y}, cv::Scalar(230, 230, 230), 1);
+        char label[8];
+        std::snprintf(label, sizeof label, "%.1f", t * 0.1);
+        cv::putText(img, label, {4, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    }
+    const double step = static_cast<double>(w - left - 10) / kArkitBlendshapeCount;
+    for (int i = 0; i < kArkitBlendshapeCount; ++i) {
+        const int x0 = left + static_cast<int>(i * step) + 2, x1 = left + static_cast<int>((i + 1) * step) - 2;
+        const int y = h - bottom - static_cast<int>(std::clamp(values[static_cast<std::size_t>(i)], 0.0, 1.0) * scale);
+        cv::rectangle(img, {x0, y}, {x1, h - bottom}, values[static_cast<std::size_t>(i)] > 0.1 ? cv::Scalar(40, 40, 220) : cv::Scalar(200, 120, 40), -1);
+        cv::Mat text(12, 140, CV_8UC3, cv::Scalar(255, 255, 255));
+        cv::putText(text, std::string(arkitNames()[static_cast<std::size_t>(i)]), {0, 10}, cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+        cv::Mat rotated;
+        cv::rotate(text, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
+        const int cx = (x0 + x1) / 2 - 6;
+        if (cx >= 0 && cx + 12 <= w) rotated.copyTo(img(cv::Rect(cx, h - bottom + 4, 12, 140)));
+    }
+    cv::line(img, {left, top}, {w - 10, top}, cv::Scalar(255, 255, 255), 1);
+    if (!cv::imwrite(path, img)) throw Error("cannot write '" + path + "'");
+}
+
+}  // namespace
+
+int runEvalExpressions(const std::vector<std::string>& argv) {
+    const Args args(argv, trackingOptions({"--labels", "--plot"}), {"--help", "--no-filter", "--no-mirror"});
+    if (args.has("--help")) {
+        std::puts(kUsage);
+        return 0;
+    }
+    const std::string shared = core::sharedDirectory();
+    if (shared.empty()) throw Error("../shared not found: the clips live there");
+    // The repository's labels: from the working directory, or beside the models/ folder in use.
+    const std::string defaultLabels =
+        core::firstExistingFile({"data/expression_labels.csv", modelDirectory() + "/../data/expression_labels.csv"});
+    const auto segments = readLabels(args.get("--labels", defaultLabels.empty() ? "data/expression_labels.csv" : defaultLabels));
+    std::vector<std::string> clips = args.positional();
+    if (clips.empty()) {
+        for (const auto& s : segments)
+            if (std::find(clips.begin(), clips.end(), s.clip) == clips.end()) clips.push_back(s.clip);
+    }
+    const TrackerConfig config = trackerConfig(args);
+    const std::string prefix = args.get("--plot", "expressions");
+
+    std::map<std::string, Track> tracks, mirrored;
+    for (const auto& clip : clips) {
+        tracks[clip] = trackClip(shared + "/data/clips/" + clip, config, false);
+        if (!args.has("--no-mirror")) mirrored[clip] = trackClip(shared + "/data/clips/" + clip, config, true);
+    }
+    // Neutral: every frame of every neutral segment.
+    std::array<double, kArkitBlendshapeCount> neutral{};
+    long neutralFrames = 0;
+    std::array<std::vector<std::pair<float, std::array<float, kArkitBlendshapeCount>>>, 1> neutralByYaw;
+    for (const auto& s : segments) {
+        if (s.label != "neutral" || !tracks.count(s.clip)) continue;
+        const Track& t = tracks[s.clip];
+        for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
+            if (!t.arkit[static_cast<std::size_t>(f)]) continue;
+            for (int k = 0; k < kArkitBlendshapeCount; ++k) neutral[static_cast<std::size_t>(k)] += (*t.arkit[static_cast<std::size_t>(f)])[static_cast<std::size_t>(k)];
+            neutralByYaw[0].push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *t.arkit[static_cast<std::size_t>(f)]});
+            ++neutralFrames;
+        }
+    }
+    for (auto& v : neutral) v = neutralFrames ? v / static_cast<double>(neutralFrames) : std::nan("");
+    std::printf("neutral (%ld frames): shapes with a mean above 0.10:", neutralFrames);
+    int worst = -1;
+    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
+        const std::string name(arkitNames()[static_cast<std::size_t>(k)]);
+        if (name.rfind("eyeLook", 0) == 0) continue;
+        if (worst < 0 || neutral[static_cast<std::size_t>(k)] > neutral[static_cast<std::size_t>(worst)]) worst = k;
+        if (neutral[static_cast<std::size_t>(k)] > 0.10) std::printf(" %s %.2f", name.c_str(), neutral[static_cast<std::size_t>(k)]);
+    }
+    std::printf("\n  worst: %s %.2f (target: every shape <= 0.10)\n", std::string(arkitNames()[static_cast<std::size_t>(worst)]).c_str(),
+                neutral[static_cast<std::size_t>(worst)]);
+
+    // Responses: per label, each expected shape's segment mean minus its neutral mean.
+    std::printf("response (segment mean - neutral mean; target >= 0.4, blink >= 0.6):\n");
+    for (const auto& [label, shapes] : expectedShapes()) {
+        std::vector<double> sums(shapes.size(), 0.0);
+        long frames = 0;
+        for (const auto& s : segments) {
+            if (s.label != label || !tracks.count(s.clip)) continue;
+            const Track& t = tracks[s.clip];
+            for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
+                if (!t.arkit[static_cast<std::size_t>(f)]) continue;
+                for (std::size_t k = 0; k < shapes.size(); ++k) sums[k] += (*t.arkit[static_cast<std::size_t>(f)])[idx(shapes[k])];
+                ++frames;
+            }
+        }
+        if (frames == 0) {
+            std::printf("  %-11s no labelled frames\n", label.c_str());
+            continue;
+        }
+        std::printf("  %-11s (%4ld frames):", label.c_str(), frames);
+        for (std::size_t k = 0; k < shapes.size(); ++k)
+            std::printf(" %s %+.2f", shapes[k].c_str(), sums[k] / static_cast<double>(frames) - neutral[idx(shapes[k])]);
+        std::printf("\n");
+    }
+    // Mirror consistency: the mirrored clip's right shape against the clip's left shape.
+    if (!args.has("--no-mirror")) {
+        double sum = 0;
+        long n = 0;
+        for (const auto& clip : clips) {
+            const Track &a = tracks[clip], &b = mirrored[clip];
+            for (std::size_t f = 0; f < std::min(a.arkit.size(), b.arkit.size()); ++f) {
+                if (!a.arkit[f] || !b.arkit[f]) continue;
+                for (int k = 0; k < kArkitBlendshapeCount; ++k) {
+                    const std::string name(arkitNames()[static_cast<std::size_t>(k)]);
+                    const std::string other = mirrorName(name);
+                    if (other == name) continue;
+                    sum += std::fabs((*a.arkit[f])[static_cast<std::size_t>(k)] - (*b.arkit[f])[idx(other)]);
+                    ++n;
+                }
+            }
+        }
+        std::printf("mirror: mean |L(image) - R(mirrored image)| %.3f over %ld shape-frames of the sided shapes (target <= 0.05)\n",
+                    n ? sum / static_cast<double>(n) : std::nan(""), n);
+    }
+    // Head-turn invariance on the neutral frames.
+    std::array<std::array<double, kArkitBlendshapeCount>, 3> byBin{};
+    std::array<long, 3> binFrames{};
+    for (const auto& [yaw, a] : neutralByYaw[0]) {
+        const int bin = std::min(2, static_cast<int>(yaw / 10.f));
+        if (yaw > 30.f) continue;
+        for (int k = 0; k < kArkitBlendshapeCount; ++k) byBin[static_cast<std::size_t>(bin)][static_cast<std::size_t>(k)] += a[static_cast<std::size_t>(k)];
+        ++binFrames[static_cast<std::size_t>(bin)];
+    }
+    double drift = 0;
+    std::string driftShape = "-";
+    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
+        double lo = 1e9, hi = -1e9;
+        for (int b = 0; b < 3; ++b) {
+            if (binFrames[static_cast<std::size_t>(b)] < 10) continue;
+            const double m = byBin[static_cast<std::size_t>(b)][static_cast<std::size_t>(k)] / static_cast<double>(binFrames[static_cast<std::size_t>(b)]);
+            lo = std::min(lo, m), hi = std::max(hi, m);
+        }
+        if (hi - lo > drift) drift = hi - lo, driftShape = std::string(arkitNames()[static_cast<std::size_t>(k)]);
+    }
+    std::printf("yaw: neutral frames with |yaw| 0-10 / 10-20 / 20-30 deg: %ld / %ld / %ld; largest change of a shape's mean %.2f (%s)\n",
+                binFrames[0], binFrames[1], binFrames[2], drift, driftShape.c_str());
+
+    barPlot(prefix + "_neutral.png", neutral, "mean ARKit weight on the labelled neutral segments");
+    for (const auto& clip : clips) {
+        LinePlot plot;
+        plot.title = clip + ": expected shapes, labelled segments as steps";
+        plot.x_label = "frame";
+        plot.y_label = "weight";
+        const Track& t = tracks[clip];
+        plot.x_max = static_cast<double>(t.arkit.size());
+        plot.x_tick_format = "%.0f";
+        std::map<std::string, bool> used;
+        for (const auto& s : segments) {
+            if (s.clip != clip) continue;
+            PlotSeries step{s.label + " (labelled)", {{s.first, 0.0}, {s.first, 1.0}, {s.last, 1.0}, {s.last, 0.0}}};
+            plot.series.push_back(step);
+            if (s.label == "neutral") continue;
+            for (const auto& shape : expectedShapes().at(s.label)) {
+                if (used[shape]) continue;
+                used[shape] = true;
+                PlotSeries line{shape, {}};
+                for (std::size_t f = 0; f < t.arkit.size(); ++f)
+                    if (t.arkit[f]) line.points.push_back({static_cast<double>(f), (*t.arkit[f])[idx(shape)]});
+                plot.series.push_back(line);
+            }
+        }
+        std::string name = clip.substr(0, clip.rfind('.'));
+        writeLinePlot(prefix + "_" + name + ".png", plot);
+    }
+    std::printf("plots: %s_neutral.png and %s_<clip>.png\n", prefix.c_str(), prefix.c_str());
+    return 0;
+}
+
+}  // namespace facetrack::cli
