@@ -2,6 +2,8 @@
 #include "core/shape2d.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
+#include "fit/fit_basis.hpp"
+#include "fit/landmark_convention.hpp"
 #include "model/face_model_data.hpp"
 #include "test_support.hpp"
 
@@ -193,6 +195,54 @@ TEST(ShippedFaceModel, ConverterReproducesTheShippedFile) {
     const std::string bytesA((std::istreambuf_iterator<char>(a)), {}), bytesB((std::istreambuf_iterator<char>(b)), {});
     fs::remove(out);
     EXPECT_TRUE(bytesA == bytesB) << "models/face_model.ftm is stale: regenerate it (models/README.md)";
+}
+
+}  // namespace
+}  // namespace facetrack
+
+namespace facetrack {
+namespace {
+
+TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
+    const std::string shipped = test::sourceDir() + "/models/landmark_convention.ftm";
+    if (!std::filesystem::exists(shipped)) GTEST_SKIP() << "models/landmark_convention.ftm is missing (build/tools/train_convention makes it)";
+    const fit::LandmarkConvention c = fit::readLandmarkConvention(shipped);
+    // Jaw landmarks keep their vertices; the others move by millimetres, not centimetres.
+    EXPECT_EQ(c.offsets_frontal_cm.leftCols(model::kContourLandmarkCount).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_GT(c.offsets_frontal_cm.cwiseAbs().maxCoeff(), 0.05);
+    EXPECT_LT(c.offsets_frontal_cm.cwiseAbs().maxCoeff(), 1.5);
+    // Symmetric: landmark 36's offset is landmark 45's with x negated.
+    EXPECT_NEAR(c.offsets_frontal_cm(0, 36), -c.offsets_frontal_cm(0, 45), 1e-9);
+    EXPECT_NEAR(c.offsets_frontal_cm(1, 36), c.offsets_frontal_cm(1, 45), 1e-9);
+
+    const auto bare = FaceModel::load(test::shippedFaceModel());
+    const auto with = FaceModel::load(test::shippedFaceModel(), shipped);
+    EXPECT_EQ(with->conventionPath(), shipped);
+    EXPECT_TRUE(bare->conventionPath().empty());
+    const fit::FitBasis& a = *bare->fitBasis();
+    const fit::FitBasis& b = *with->fitBasis();
+    ASSERT_EQ(a.slotCount(), b.slotCount());
+    int moved = 0;
+    for (int s = 0; s < a.slotCount(); ++s) moved += (a.neutral.col(s) - b.neutral.col(s)).norm() > 0.0 ? 1 : 0;
+    EXPECT_EQ(moved, model::kLandmarkCount - model::kContourLandmarkCount);
+    EXPECT_TRUE(a.identity.isApprox(b.identity));
+    // The mesh itself is the model's: the convention is the fit's business.
+    EXPECT_EQ(bare->vertices({}, {})[100].x, with->vertices({}, {})[100].x);
+
+    const std::string copy = test::tempPath("convention.ftm");
+    fit::writeLandmarkConvention(copy, c);
+    EXPECT_EQ(fit::readLandmarkConvention(copy).offsets_frontal_cm, c.offsets_frontal_cm);
+    {
+        std::fstream f(copy, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(60);
+        f.put('\x55');
+    }
+    EXPECT_THROW(FaceModel::load(test::shippedFaceModel(), copy), Error);
+    EXPECT_THROW(FaceModel::load(test::shippedFaceModel(), test::tempPath("no_convention.ftm")), Error);
+    fit::LandmarkConvention wild = c;
+    wild.offsets_frontal_cm(0, 30) = 5.0;
+    EXPECT_THROW(fit::writeLandmarkConvention(copy, wild), Error);
+    std::filesystem::remove(copy);
 }
 
 }  // namespace

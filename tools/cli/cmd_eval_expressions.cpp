@@ -202,7 +202,15 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
         if (worst < 0 || neutral[static_cast<std::size_t>(k)] > neutral[static_cast<std::size_t>(worst)]) worst = k;
         if (neutral[static_cast<std::size_t>(k)] > 0.10) std::printf(" %s %.2f", name.c_str(), neutral[static_cast<std::size_t>(k)]);
     }
-    std::printf("\n  worst: %s %.2f (target: every shape <= 0.10)\n", std::string(arkitNames()[static_cast<std::size_t>(worst)]).c_str(),
+    double total = 0;
+    int counted = 0;
+    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
+        if (std::string(arkitNames()[static_cast<std::size_t>(k)]).rfind("eyeLook", 0) == 0) continue;
+        total += neutral[static_cast<std::size_t>(k)];
+        ++counted;
+    }
+    std::printf("\n  mean over the %d shapes (eyeLook excluded) %.3f; worst: %s %.2f (target: every shape <= 0.10)\n", counted,
+                total / counted, std::string(arkitNames()[static_cast<std::size_t>(worst)]).c_str(),
                 neutral[static_cast<std::size_t>(worst)]);
 
     // Responses: per label, each expected shape's segment mean minus its neutral mean.

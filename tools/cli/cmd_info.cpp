@@ -25,6 +25,8 @@ int runInfo(const std::vector<std::string>& argv) {
                 model->vertexCount(), model->triangleCount(), model->identityCount(),
                 100.0 * model->identityExplainedVariance(), model->expressionNames().size());
     std::printf("  output: ARKit-%d blendshapes (tongueOut unsupported, always 0)\n", kArkitBlendshapeCount);
+    std::printf("  landmark convention: %s\n", model->conventionPath().empty() ? "none (the model's own landmark vertices)"
+                                                                              : model->conventionPath().c_str());
 
     if (models.landmarks) {
         std::printf("landmark model: %s (format v%u)\n  LBF, %d stages, %d trees of depth %d per landmark\n",

@@ -45,11 +45,21 @@ public:
     /// Reads a model file. Throws facetrack::Error naming the file when it is
     /// missing, truncated, corrupt or of another format version.
     static std::shared_ptr<const FaceModel> load(const std::string& path);
+    /// The same, with the landmark convention at `conventionPath`: where
+    /// 300-W-style landmarks sit on this model (docs/expressions.md), which
+    /// the fit uses in place of the model's own landmark vertices. Throws
+    /// Error naming a missing or corrupt convention file.
+    static std::shared_ptr<const FaceModel> load(const std::string& path, const std::string& conventionPath);
 
-    /// The model shipped with facetrack: defaultPath().
+    /// The model shipped with facetrack: defaultPath(), with the shipped
+    /// landmark convention when defaultConventionPath() exists.
     static std::shared_ptr<const FaceModel> loadDefault();
     /// face_model.ftm in modelDirectory() (docs/models.md says where that is).
     static std::string defaultPath();
+    /// landmark_convention.ftm in modelDirectory().
+    static std::string defaultConventionPath();
+    /// The convention file the fit uses; empty: the model's own landmark vertices.
+    const std::string& conventionPath() const;
 
     /// The file format version this build reads and writes.
     static std::uint32_t formatVersion();
@@ -92,12 +102,14 @@ public:
     const model::FaceModelData& data() const { return *data_; }
     const std::shared_ptr<const fit::FitBasis>& fitBasis() const { return fit_basis_; }
 
-    explicit FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source);
+    /// `convention` empty: none (the fit uses the model's landmark vertices as they are).
+    FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source, std::string convention = {});
 
 private:
     std::shared_ptr<const model::FaceModelData> data_;
     std::shared_ptr<const fit::FitBasis> fit_basis_;
     std::string source_;
+    std::string convention_;
     std::vector<std::string> expression_names_;
     std::shared_ptr<const model::ArkitMapping> arkit_;
 };

@@ -3,17 +3,22 @@
 #include "facetrack/error.hpp"
 #include "facetrack/version.hpp"
 #include "fit/fit_basis.hpp"
+#include "fit/landmark_convention.hpp"
 #include "model/arkit_mapping.hpp"
 #include "model/face_model_data.hpp"
 
+#include <filesystem>
+
 namespace facetrack {
 
-FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source)
-    : data_(std::move(data)), source_(std::move(source)) {
+FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source, std::string convention)
+    : data_(std::move(data)), source_(std::move(source)), convention_(std::move(convention)) {
     if (!data_) throw Error("FaceModel: null model data");
     for (const auto& e : data_->expressions) expression_names_.push_back(e.name);
     arkit_ = std::make_shared<const model::ArkitMapping>(model::makeArkitMapping(expression_names_));
-    fit_basis_ = std::make_shared<const fit::FitBasis>(fit::buildFitBasis(*data_));
+    fit::FitBasis basis = fit::buildFitBasis(*data_);
+    if (!convention_.empty()) fit::applyConvention(basis, fit::readLandmarkConvention(convention_));
+    fit_basis_ = std::make_shared<const fit::FitBasis>(std::move(basis));
 }
 
 std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path) {
@@ -21,8 +26,19 @@ std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path) {
     return std::make_shared<const FaceModel>(std::move(data), path);
 }
 
-std::shared_ptr<const FaceModel> FaceModel::loadDefault() { return load(defaultPath()); }
+std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path, const std::string& conventionPath) {
+    auto data = std::make_shared<const model::FaceModelData>(model::readFaceModel(path));
+    return std::make_shared<const FaceModel>(std::move(data), path, conventionPath);
+}
+
+std::shared_ptr<const FaceModel> FaceModel::loadDefault() {
+    const std::string convention = defaultConventionPath();
+    std::error_code ec;
+    return std::filesystem::exists(convention, ec) ? load(defaultPath(), convention) : load(defaultPath());
+}
 std::string FaceModel::defaultPath() { return modelDirectory() + "/face_model.ftm"; }
+std::string FaceModel::defaultConventionPath() { return modelDirectory() + "/landmark_convention.ftm"; }
+const std::string& FaceModel::conventionPath() const { return convention_; }
 
 std::uint32_t FaceModel::formatVersion() { return model::kFaceModelVersion; }
 
