@@ -81,7 +81,7 @@ void DemoView::draw(const cv::Mat& frameBgr, const FrameResult& result, const Hu
         lines.push_back(pose);
     }
     lines.insert(lines.end(), hud.notes.begin(), hud.notes.end());
-    lines.push_back("space pause   r reset identity   m mirror   q quit");
+    lines.push_back("space pause   r reset identity   n neutral   m mirror   q quit");
     const cv::Mat text = hudImage(lines, width());
     // Top-left corner; GL's viewport origin is the bottom-left.
     image_.draw(text, 0, panel_height_ - text.rows, text.cols, text.rows, false);

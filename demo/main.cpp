@@ -155,6 +155,14 @@ int run(int argc, char** argv) {
             tracker.resetIdentity();
             keys.reset_identity = false;
         }
+        if (keys.neutral_changed) {
+            if (keys.neutral) {
+                tracker.calibrateNeutral();
+            } else {
+                tracker.resetNeutral();
+            }
+            keys.neutral_changed = false;
+        }
         if (!keys.paused && stopped.empty() && !pending) {
             waiting.clear();
             switch (reader.read(frame)) {

@@ -298,5 +298,37 @@ TEST(Tracker, FollowsTwoFacesWithTheirOwnIds) {
     }
 }
 
+TEST(Tracker, CalibrateNeutralMeasuresFromTheUsersNeutralUntilReset) {
+    FACETRACK_REQUIRE_PIPELINE();
+    Tracker tracker(Models::loadDefault());
+    const auto frames = clipFrames(20);
+    FrameResult before;
+    for (std::size_t i = 0; i < frames.size(); ++i) tracker.process(core::viewOf(frames[i]), i / 25.0, before);
+    ASSERT_EQ(before.faces.size(), 1u);
+    ASSERT_TRUE(before.faces[0].expression);
+    tracker.calibrateNeutral();
+    // The same frame again: every weight (but where the eyes look) is near its neutral, i.e. near 0.
+    FrameResult after;
+    for (int k = 0; k < 3; ++k) tracker.process(core::viewOf(frames.back()), (20 + k) / 25.0, after);
+    ASSERT_EQ(after.faces.size(), 1u);
+    const auto& w = after.faces[0].expression->arkit;
+    const auto& w0 = before.faces[0].expression->arkit;
+    float largestBefore = 0.f, largestAfter = 0.f;
+    for (std::size_t k = 0; k < w.size(); ++k) {
+        if (std::string(arkitNames()[k]).rfind("eyeLook", 0) == 0) continue;
+        largestBefore = std::max(largestBefore, w0[k]);
+        largestAfter = std::max(largestAfter, w[k]);
+    }
+    EXPECT_GT(largestBefore, 0.1f);
+    EXPECT_LT(largestAfter, 0.1f);
+    // Off again: the weights as the fit gives them.
+    tracker.resetNeutral();
+    tracker.process(core::viewOf(frames.back()), 23 / 25.0, after);
+    float largest = 0.f;
+    for (std::size_t k = 0; k < w.size(); ++k)
+        if (std::string(arkitNames()[k]).rfind("eyeLook", 0) != 0) largest = std::max(largest, after.faces[0].expression->arkit[k]);
+    EXPECT_GT(largest, 0.1f);
+}
+
 }  // namespace
 }  // namespace facetrack

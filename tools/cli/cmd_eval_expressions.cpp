@@ -25,7 +25,8 @@ namespace facetrack::cli {
 
 namespace {
 
-const char* kUsage = R"(usage: facetrack eval-expressions [CLIP...] [--labels CSV] [--plot PREFIX] [--no-mirror] [tracker options]
+const char* kUsage = R"(usage: facetrack eval-expressions [CLIP...] [--labels CSV] [--plot PREFIX] [--no-mirror] [--calibrate-neutral]
+                                 [tracker options]
 The ARKit-52 weights on hand-labelled segments (default data/expression_labels.csv, clips from
 ../shared/data/clips; with no CLIP, every clip the labels name):
   neutral   per shape, the mean over neutral segments (eyeLook shapes excluded from the worst)
@@ -33,7 +34,9 @@ The ARKit-52 weights on hand-labelled segments (default data/expression_labels.c
   mirror    mean |left shape (image) - right shape (mirrored image)| over all frames
   yaw       the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg), the largest change
 Writes PREFIX_neutral.png (per-shape bars) and PREFIX_<clip>.png (time series of the expected
-shapes, labelled segments as steps); PREFIX defaults to expressions.)";
+shapes, labelled segments as steps); PREFIX defaults to expressions. --calibrate-neutral calls
+Tracker::calibrateNeutral() at the first frame of each clip's first neutral segment; that frame
+is left out of the neutral figure.)";
 
 struct Segment {
     std::string clip;
@@ -88,7 +91,8 @@ struct Track {
     std::vector<float> yaw;
 };
 
-Track trackClip(const std::string& path, const TrackerConfig& config, bool mirrored) {
+/// `neutralAt` >= 0: Tracker::calibrateNeutral() after that frame.
+Track trackClip(const std::string& path, const TrackerConfig& config, bool mirrored, int neutralAt) {
     cv::VideoCapture video(path);
     if (!video.isOpened()) throw Error("cannot open clip " + path);
     Tracker tracker(Models::loadDefault(), config);
@@ -98,6 +102,7 @@ Track trackClip(const std::string& path, const TrackerConfig& config, bool mirro
     for (int f = 0; video.read(bgr); ++f) {
         if (mirrored) cv::flip(bgr, bgr, 1);
         tracker.process(tools::viewOf(bgr), f / 30.0, result);
+        if (f == neutralAt) tracker.calibrateNeutral();
         if (!result.faces.empty() && result.faces[0].expression) {
             t.arkit.push_back(result.faces[0].expression->arkit);
             t.yaw.push_back(result.faces[0].pose ? result.faces[0].pose->euler_deg.y : 0.f);
@@ -155,7 +160,7 @@ void barPlot(const std::string& path, const std::array<double, kArkitBlendshapeC
 }  // namespace
 
 int runEvalExpressions(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--labels", "--plot"}), {"--help", "--no-filter", "--no-mirror"});
+    const Args args(argv, trackingOptions({"--labels", "--plot"}), {"--help", "--no-filter", "--no-mirror", "--calibrate-neutral"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -174,12 +179,22 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     const TrackerConfig config = trackerConfig(args);
     const std::string prefix = args.get("--plot", "expressions");
 
+    // With --calibrate-neutral, each clip's first neutral segment's first frame calibrates, and is
+    // left out of the neutral figure (the rest of the segment counts: a relaxed face stays relaxed).
+    const bool calibrate = args.has("--calibrate-neutral");
+    std::map<std::string, const Segment*> calibrating;
+    if (calibrate) {
+        for (const auto& s : segments)
+            if (s.label == "neutral" && !calibrating.count(s.clip)) calibrating[s.clip] = &s;
+    }
     std::map<std::string, Track> tracks, mirrored;
     for (const auto& clip : clips) {
-        tracks[clip] = trackClip(shared + "/data/clips/" + clip, config, false);
-        if (!args.has("--no-mirror")) mirrored[clip] = trackClip(shared + "/data/clips/" + clip, config, true);
+        const int at = calibrating.count(clip) ? calibrating[clip]->first : -1;
+        tracks[clip] = trackClip(shared + "/data/clips/" + clip, config, false, at);
+        if (!args.has("--no-mirror")) mirrored[clip] = trackClip(shared + "/data/clips/" + clip, config, true, at);
     }
-    // Neutral: every frame of every neutral segment.
+    if (calibrate) std::printf("neutral calibrated at the first frame of each clip's first neutral segment (%zu clips)\n", calibrating.size());
+    // Neutral: every frame of every neutral segment (but the calibrating ones).
     std::array<double, kArkitBlendshapeCount> neutral{};
     long neutralFrames = 0;
     std::array<std::vector<std::pair<float, std::array<float, kArkitBlendshapeCount>>>, 1> neutralByYaw;
@@ -188,6 +203,7 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
         const Track& t = tracks[s.clip];
         for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
             if (!t.arkit[static_cast<std::size_t>(f)]) continue;
+            if (calibrating.count(s.clip) && f <= calibrating[s.clip]->first) continue;  // the calibration frame (and before)
             for (int k = 0; k < kArkitBlendshapeCount; ++k) neutral[static_cast<std::size_t>(k)] += (*t.arkit[static_cast<std::size_t>(f)])[static_cast<std::size_t>(k)];
             neutralByYaw[0].push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *t.arkit[static_cast<std::size_t>(f)]});
             ++neutralFrames;

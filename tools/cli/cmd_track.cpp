@@ -20,12 +20,14 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage = R"(usage: facetrack track [CLIP|DIR|IMAGE | --camera /dev/videoN] [--out results.jsonl] [--overlay out.mp4]
-                       [--frames N] [--raw] [tracker options]
+                       [--frames N] [--raw] [--neutral-at SECONDS] [tracker options]
 Runs the tracker and writes one JSON line per frame (to stdout, or --out):
   {"frame": N, "time_s": t, "tracked": b, "id": i, "detected": b, "confidence": c, "fit_residual": r,
    "box": [x0,y0,x1,y1], "landmarks": [[x,y] x 68], "pose": {"quaternion": [w,x,y,z],
    "euler_deg": [pitch,yaw,roll], "translation_mm": [x,y,z]}, "blendshapes": {52 ARKit names: w},
    "gaze": ..., "identity_calibrated": b, "timings_ms": {"detect": ms, "landmarks": ms, ...}}
+--neutral-at S takes the face's expression at S seconds as its neutral (Tracker::calibrateNeutral):
+the weights after it are measured from there.
 "tracked" says whether a face was followed in this frame; the face fields are the first face's
 (null without a face, or when their stage is not available: 'facetrack info' lists the stages).
 With --max-faces N > 1 a "faces" array holds every face. --raw adds "raw": the values before
@@ -137,7 +139,8 @@ MediaReader openInput(const Args& args, std::string& name) {
 }  // namespace
 
 int runTrack(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--camera", "--out", "--frames", "--overlay"}), {"--help", "--raw", "--no-filter"});
+    const Args args(argv, trackingOptions({"--camera", "--out", "--frames", "--overlay", "--neutral-at"}),
+                    {"--help", "--raw", "--no-filter"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -161,6 +164,9 @@ int runTrack(const std::vector<std::string>& argv) {
     cv::VideoWriter video;
     cv::Size videoSize;
 
+    // --neutral-at S: Tracker::calibrateNeutral() after the first frame at or past S seconds.
+    const double neutralAt = args.number("--neutral-at", -1.0);
+    bool neutralDone = neutralAt < 0;
     MediaFrame frame;
     int frames = 0, withFace = 0;
     double trackerSeconds = 0.0;
@@ -168,6 +174,10 @@ int runTrack(const std::vector<std::string>& argv) {
         const auto start = std::chrono::steady_clock::now();
         if (reader.isStillImages()) tracker.reset();  // unrelated photos: nothing to follow
         const FrameResult result = tracker.process(tools::viewOf(frame.bgr), frame.time_s);
+        if (!neutralDone && frame.time_s >= neutralAt) {
+            tracker.calibrateNeutral();
+            neutralDone = true;
+        }
         trackerSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         out << frameJson(frames, frame.time_s, result, config.max_faces, raw).dump() << '\n';
         if (args.has("--overlay")) {

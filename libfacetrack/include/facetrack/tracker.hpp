@@ -123,6 +123,14 @@ public:
     /// the mean face and calibrate again.
     void resetIdentity();
 
+    /// Takes every followed face's current expression as that user's neutral
+    /// (ask them to relax first): from now on each weight w is reported as
+    /// (w - w0) / (1 - w0), clamped to [0, 1], w0 its neutral value; the eyes'
+    /// look directions are left as they are. Off by default; per face, so a
+    /// face found later starts without one. resetNeutral() turns it off.
+    void calibrateNeutral();
+    void resetNeutral();
+
     /// Forgets every followed face: the next frame is searched from scratch,
     /// as the first of a new stream (e.g. between unrelated photos). Face ids
     /// keep counting up.

@@ -56,6 +56,9 @@ struct FaceTrack {
     std::optional<Landmarks68> next_start;
     /// One per stage, in list order; null for stages that keep nothing.
     std::vector<std::unique_ptr<StageState>> states;
+    /// The user's neutral expression (Tracker::calibrateNeutral): the output's
+    /// weights are reported relative to it. Empty: off.
+    std::optional<ExpressionResult> neutral;
 
     /// A stage found the face at `where` in this frame.
     void locate(const Box& where) {

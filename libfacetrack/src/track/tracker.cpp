@@ -63,6 +63,13 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
     return stages;
 }
 
+/// The face model's eyeLook expressions: a neutral calibration leaves them alone.
+std::vector<bool> eyeLookMask(const FaceModel& face) {
+    std::vector<bool> mask;
+    for (const auto& name : face.expressionNames()) mask.push_back(name.rfind("eyeLook", 0) == 0);
+    return mask;
+}
+
 }  // namespace
 
 struct Tracker::Impl {
@@ -76,10 +83,10 @@ Tracker::Tracker(Models models, const TrackerConfig& config, std::unique_ptr<Fac
     validate(models, config);
     if (!detector) throw Error("Tracker: no face detector given");
     pipeline::StageList stages = stageList(models, config, *detector);
-    impl_ = std::make_unique<Impl>(Impl{std::move(models),
-                                        track::TrackerCore(std::move(detector), std::move(stages),
-                                                           {config.max_faces, config.detect_interval, config.verify_interval,
-                                                            config.camera})});
+    track::LifecycleSettings lifecycle{config.max_faces, config.detect_interval, config.verify_interval, config.camera,
+                                       eyeLookMask(*models.face)};
+    impl_ = std::make_unique<Impl>(
+        Impl{std::move(models), track::TrackerCore(std::move(detector), std::move(stages), std::move(lifecycle))});
 }
 
 Tracker::~Tracker() = default;
@@ -104,6 +111,8 @@ FrameResult Tracker::process(const ImageView& frame, double time_s) {
 
 void Tracker::reset() { impl_->core.reset(); }
 void Tracker::resetIdentity() { impl_->core.resetCalibration(); }
+void Tracker::calibrateNeutral() { impl_->core.calibrateNeutral(true); }
+void Tracker::resetNeutral() { impl_->core.calibrateNeutral(false); }
 std::vector<StageInfo> Tracker::stages() const { return impl_->core.stages(); }
 const Models& Tracker::models() const { return impl_->models; }
 

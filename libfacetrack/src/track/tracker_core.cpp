@@ -2,6 +2,7 @@
 
 #include "core/box.hpp"
 #include "core/image.hpp"
+#include "facetrack/arkit.hpp"
 #include "facetrack/error.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -102,6 +103,23 @@ void TrackerCore::runStages(const pipeline::FrameInput& input, pipeline::FaceTra
     if (!face.located) face.lost = true;
 }
 
+namespace {
+/// w' = (w - w0) / (1 - w0), clamped to [0, 1], for every weight but the eyes'
+/// look directions (a neutral face may look anywhere). No allocation.
+void relativeToNeutral(const ExpressionResult& neutral, const std::vector<bool>& keepNative, ExpressionResult& e) {
+    const auto rescale = [](float w, float w0) { return w0 < 0.99f ? std::clamp((w - w0) / (1.f - w0), 0.f, 1.f) : w; };
+    for (std::size_t k = 0; k < e.arkit.size(); ++k) {
+        if (arkitNames()[k].substr(0, 7) == "eyeLook") continue;
+        e.arkit[k] = rescale(e.arkit[k], neutral.arkit[k]);
+    }
+    if (neutral.native.size() != e.native.size()) return;
+    for (std::size_t k = 0; k < e.native.size(); ++k) {
+        if (k < keepNative.size() && keepNative[k]) continue;
+        e.native[k] = rescale(e.native[k], neutral.native[k]);
+    }
+}
+}  // namespace
+
 void TrackerCore::dropLost() {
     tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(), [](const pipeline::FaceTrack& t) { return t.lost; }),
                   tracks_.end());
@@ -167,6 +185,7 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
         t.result.tracked = !t.fresh;
         t.result.box = t.box;
         out.faces[i] = t.result;
+        if (t.neutral && out.faces[i].expression) relativeToNeutral(*t.neutral, settings_.neutral_keeps_native, *out.faces[i].expression);
         t.fresh = false;
         ++t.age;
     }
@@ -183,6 +202,16 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
 void TrackerCore::reset() {
     tracks_.clear();
     last_time_ = std::numeric_limits<double>::quiet_NaN();
+}
+
+void TrackerCore::calibrateNeutral(bool on) {
+    for (auto& t : tracks_) {
+        if (on && t.result.expression) {
+            t.neutral = t.result.expression;
+        } else {
+            t.neutral.reset();
+        }
+    }
 }
 
 void TrackerCore::resetCalibration() {

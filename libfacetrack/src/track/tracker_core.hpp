@@ -19,6 +19,9 @@ struct LifecycleSettings {
     int detect_interval = 15;  ///< TrackerConfig::detect_interval
     int verify_interval = 30;  ///< TrackerConfig::verify_interval
     CameraConfig camera;
+    /// Native expressions a neutral calibration leaves alone (the eyes' look
+    /// directions: a neutral face may look anywhere), as a mask over them.
+    std::vector<bool> neutral_keeps_native;
 };
 
 class TrackerCore {
@@ -33,6 +36,8 @@ public:
 
     void reset();
     void resetCalibration();
+    /// Takes each followed face's current expression as its neutral; off: forgets them.
+    void calibrateNeutral(bool on);
 
     /// "detect", "verify", then the stages, in order.
     std::vector<StageInfo> stages() const;
