@@ -330,5 +330,32 @@ TEST(Tracker, CalibrateNeutralMeasuresFromTheUsersNeutralUntilReset) {
     EXPECT_GT(largest, 0.1f);
 }
 
+TEST(Tracker, SaysWhichShapesItEstimatesAndTheOthersStayZero) {
+    FACETRACK_REQUIRE_PIPELINE();
+    Tracker tracker(Models::loadDefault());
+    const auto estimated = tracker.estimatedShapes();
+    const auto has = [&](const char* n) { return std::find(estimated.begin(), estimated.end(), n) != estimated.end(); };
+    EXPECT_TRUE(has("jawOpen"));
+    EXPECT_TRUE(has("mouthSmileLeft"));
+    EXPECT_FALSE(has("tongueOut"));
+    EXPECT_EQ(has("eyeLookInLeft"), tracker.models().eyes != nullptr);  // the gaze stage's (eyeBlink is the fit's too)
+    const auto frames = clipFrames(10);
+    FrameResult r;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        tracker.process(core::viewOf(frames[i]), i / 25.0, r);
+        ASSERT_EQ(r.faces.size(), 1u);
+        for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
+            if (!has(std::string(arkitNames()[k]).c_str())) {
+                EXPECT_EQ(r.faces[0].expression->arkit[k], 0.f) << arkitNames()[k];
+            }
+        }
+    }
+    // Without the eye model the eye shapes are not estimated.
+    Models noEyes = Models::loadDefault();
+    noEyes.eyes = nullptr;
+    const auto fewer = Tracker(noEyes).estimatedShapes();
+    EXPECT_EQ(std::count(fewer.begin(), fewer.end(), "eyeLookInLeft"), 0);
+}
+
 }  // namespace
 }  // namespace facetrack

@@ -2,6 +2,7 @@
 
 #include "facetrack/facetrack.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace facetrack::cli {
@@ -24,7 +25,7 @@ int runInfo(const std::vector<std::string>& argv) {
     std::printf("  %d vertices, %d triangles, %d identity modes (%.1f%% of face-region variance), %zu expressions\n",
                 model->vertexCount(), model->triangleCount(), model->identityCount(),
                 100.0 * model->identityExplainedVariance(), model->expressionNames().size());
-    std::printf("  output: ARKit-%d blendshapes (tongueOut unsupported, always 0)\n", kArkitBlendshapeCount);
+    std::printf("  output: ARKit-%d blendshapes (tongueOut unsupported, always 0; which are estimated: below)\n", kArkitBlendshapeCount);
     std::printf("  landmark convention: %s\n", model->conventionPath().empty() ? "none (the model's own landmark vertices)"
                                                                               : model->conventionPath().c_str());
 
@@ -43,6 +44,13 @@ int runInfo(const std::vector<std::string>& argv) {
     for (const auto& stage : tracker.stages()) {
         std::printf("  %-10s %s\n", stage.name.c_str(), stage.detail.c_str());
     }
+    const auto estimated = tracker.estimatedShapes();
+    std::printf("ARKit shapes estimated (%zu of %d):", estimated.size(), kArkitBlendshapeCount);
+    for (const auto& name : estimated) std::printf(" %s", name.c_str());
+    std::printf("\nalways 0 with these models:");
+    for (const auto& name : arkitNames())
+        if (std::find(estimated.begin(), estimated.end(), name) == estimated.end()) std::printf(" %s", std::string(name).c_str());
+    std::printf("\n");
     return 0;
 }
 

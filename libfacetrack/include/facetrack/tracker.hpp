@@ -139,6 +139,10 @@ public:
     /// Every pipeline stage, in order, with its availability in this build.
     std::vector<StageInfo> stages() const;
 
+    /// The ARKit shapes some available stage estimates (arkitNames() order);
+    /// every other weight is always 0 with these models and this configuration.
+    std::vector<std::string> estimatedShapes() const;
+
     const Models& models() const;
 
 private:

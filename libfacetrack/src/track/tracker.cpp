@@ -4,6 +4,7 @@
 #include "facetrack/error.hpp"
 #include "filter/filter_stage.hpp"
 #include "fit/camera.hpp"
+#include "fit/fit_basis.hpp"
 #include "fit/fit_stage.hpp"
 #include "gaze/gaze_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
@@ -114,6 +115,25 @@ void Tracker::resetIdentity() { impl_->core.resetCalibration(); }
 void Tracker::calibrateNeutral() { impl_->core.calibrateNeutral(true); }
 void Tracker::resetNeutral() { impl_->core.calibrateNeutral(false); }
 std::vector<StageInfo> Tracker::stages() const { return impl_->core.stages(); }
+
+std::vector<std::string> Tracker::estimatedShapes() const {
+    // The native expressions the stages write: the fit's observable ones and the gaze stage's eye shapes.
+    const FaceModel& face = *impl_->models.face;
+    std::vector<float> native(face.expressionNames().size(), 0.f);
+    for (const StageInfo& stage : stages()) {
+        if (!stage.available) continue;
+        if (stage.name == "fit") {
+            for (const int k : face.fitBasis()->expressions) native[static_cast<std::size_t>(k)] = 1.f;
+        } else if (stage.name == "gaze") {
+            for (const int k : gaze::gazeExpressions(face)) native[static_cast<std::size_t>(k)] = 1.f;
+        }
+    }
+    const auto arkit = face.toArkit(native);
+    std::vector<std::string> names;
+    for (std::size_t i = 0; i < arkit.size(); ++i)
+        if (arkit[i] > 0.f) names.emplace_back(arkitNames()[i]);
+    return names;
+}
 const Models& Tracker::models() const { return impl_->models; }
 
 }  // namespace facetrack
