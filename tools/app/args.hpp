@@ -52,4 +52,19 @@ private:
     std::map<std::string, std::string> options_;
 };
 
+/// "a,b,,c" -> {"a", "b", "c"}: an option's comma-separated list, empty items dropped.
+inline std::vector<std::string> splitList(const std::string& text) {
+    std::vector<std::string> out;
+    std::string item;
+    for (const char c : text + ",") {
+        if (c != ',') {
+            item += c;
+        } else if (!item.empty()) {
+            out.push_back(item);
+            item.clear();
+        }
+    }
+    return out;
+}
+
 }  // namespace facetrack::tools

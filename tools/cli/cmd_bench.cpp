@@ -1,4 +1,5 @@
 #include "commands.hpp"
+#include "stats.hpp"
 #include "app/media.hpp"
 #include "plot.hpp"
 
@@ -20,18 +21,6 @@ share of frames with a face, and mean / p50 / p99 ms per stage and in total. Wri
 plot of per-frame time by stage (default: bench.png). --size 640x480 letterboxes every frame
 into that size first. Run it on one core for steady numbers: taskset -c 0 facetrack bench CLIP.
 Tracker options as for 'facetrack track'.)";
-
-double percentile(std::vector<double> v, double q) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
-}
-
-double mean(const std::vector<double>& v) {
-    double sum = 0;
-    for (const double x : v) sum += x;
-    return v.empty() ? 0.0 : sum / static_cast<double>(v.size());
-}
 
 }  // namespace
 

@@ -3,6 +3,7 @@
 // held-out clips and 300-W images, and on synthetic renders of known gaze.
 
 #include "commands.hpp"
+#include "stats.hpp"
 
 #include "app/image_view.hpp"
 #include "common/faces300w.hpp"
@@ -36,25 +37,6 @@ The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, 
            angular error by inter-ocular bin, mean and p95
 Defaults: the held-out clips liveportrait_d14_gaze_shifts.mp4 and fgnet_talking_face_franck.mp4,
 the 300-W validation split, 400 synthetic renders.)";
-
-double percentile(std::vector<double> v, double q) {
-    if (v.empty()) return std::nan("");
-    std::sort(v.begin(), v.end());
-    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
-}
-double mean(const std::vector<double>& v) {
-    double s = 0;
-    for (double x : v) s += x;
-    return v.empty() ? std::nan("") : s / static_cast<double>(v.size());
-}
-
-std::vector<std::string> splitList(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    for (std::string part; std::getline(in, part, ',');)
-        if (!part.empty()) out.push_back(part);
-    return out;
-}
 
 const EyeGaze& eyeOf(const GazeResult& g, gaze::Eye e) { return e == gaze::Eye::Left ? g.left : g.right; }
 float blinkOf(const ExpressionResult& x, gaze::Eye e) {
@@ -185,7 +167,7 @@ int runEvalGaze(const std::vector<std::string>& argv) {
     const TrackerConfig config = trackerConfig(args);
     if (!Models::loadDefault().eyes) throw Error("no eye model: " + EyeModel::defaultPath() + " not found");
 
-    const auto clips = splitList(args.get("--clips", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
+    const auto clips = tools::splitList(args.get("--clips", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
     if (!clips.empty()) {
         const auto teacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
         std::vector<double> pupil, recall, openClosed;

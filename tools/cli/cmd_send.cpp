@@ -2,6 +2,7 @@
 // app over VMC, iFacialMocap or OpenSeeFace (docs/protocols.md, docs/embedding.md).
 
 #include "commands.hpp"
+#include "stats.hpp"
 
 #include "send/sender.hpp"
 
@@ -37,12 +38,6 @@ docs/embedding.md says how to set up each app.)";
 
 volatile std::sig_atomic_t g_interrupted = 0;
 void onInterrupt(int) { g_interrupted = 1; }
-
-double percentile(std::vector<double> v, double q) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
-}
 
 double cpuSeconds() {
     rusage usage{};

@@ -1,4 +1,5 @@
 #include "eval_gaze_synthetic.hpp"
+#include "stats.hpp"
 
 #include "app/image_view.hpp"
 #include "common/synthetic_face.hpp"
@@ -19,16 +20,6 @@ namespace facetrack::cli {
 namespace {
 constexpr float kDeg = 3.14159265358979f / 180.f;
 
-double percentile(std::vector<double> v, double q) {
-    if (v.empty()) return std::nan("");
-    std::sort(v.begin(), v.end());
-    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
-}
-double mean(const std::vector<double>& v) {
-    double s = 0;
-    for (double x : v) s += x;
-    return v.empty() ? std::nan("") : s / static_cast<double>(v.size());
-}
 
 /// Camera-from-model of a head turned by (yaw, pitch, roll) degrees from
 /// facing the camera (yaw > 0 to the subject's left, pitch > 0 down as in HeadPose).

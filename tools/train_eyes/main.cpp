@@ -326,14 +326,6 @@ void reportAperture(const PatchForest& forest, const Dataset& data, const char* 
                 absError / n, sumT / n, r, data.eyes.size());
 }
 
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    for (std::string part; std::getline(in, part, ',');)
-        if (!part.empty()) out.push_back(part);
-    return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -349,7 +341,7 @@ int main(int argc, char** argv) {
         const std::string shared = core::sharedDirectory();
         if (shared.empty()) throw Error("../shared not found: the teacher labels live there");
         const std::string out = args.get("--out", "models/eye_model.ftm");
-        const auto holdout = split(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
+        const auto holdout = tools::splitList(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
         const unsigned seed = static_cast<unsigned>(args.number("--seed", 1));
         const auto start = std::chrono::steady_clock::now();
         const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
