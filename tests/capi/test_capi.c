@@ -114,6 +114,8 @@ int main(void) {
     if (video) pclose(video);
     CHECK(frames == kFrames);
     CHECK(withFace == frames);
+    CHECK(ft_tracker_calibrate_neutral(tracker) == FT_OK && ft_tracker_reset_neutral(tracker) == FT_OK);
+    CHECK(ft_tracker_calibrate_neutral(NULL) == FT_INVALID_ARGUMENT);
     CHECK(ft_tracker_reset(tracker) == FT_OK && ft_tracker_reset_identity(tracker) == FT_OK);
     ft_tracker_destroy(tracker);
     ft_models_destroy(models);

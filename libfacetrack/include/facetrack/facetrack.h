@@ -148,6 +148,10 @@ FT_API ft_status ft_tracker_face(const ft_tracker* tracker, int32_t index, ft_fa
 /** Forget every face (a new stream) / the calibrated identities. */
 FT_API ft_status ft_tracker_reset(ft_tracker* tracker);
 FT_API ft_status ft_tracker_reset_identity(ft_tracker* tracker);
+/** Take every followed face's current expression as its neutral (the C++
+ *  Tracker::calibrateNeutral) / turn that off. */
+FT_API ft_status ft_tracker_calibrate_neutral(ft_tracker* tracker);
+FT_API ft_status ft_tracker_reset_neutral(ft_tracker* tracker);
 /** The tracker's last error ("" after a success); owned by the tracker, valid
  *  until its next call. NULL tracker: a static string saying so. */
 FT_API const char* ft_tracker_last_error(const ft_tracker* tracker);

@@ -236,6 +236,16 @@ ft_status ft_tracker_reset_identity(ft_tracker* tracker) {
     return guarded(tracker->error, [&] { tracker->tracker.resetIdentity(); });
 }
 
+ft_status ft_tracker_calibrate_neutral(ft_tracker* tracker) {
+    if (!tracker) return FT_INVALID_ARGUMENT;
+    return guarded(tracker->error, [&] { tracker->tracker.calibrateNeutral(); });
+}
+
+ft_status ft_tracker_reset_neutral(ft_tracker* tracker) {
+    if (!tracker) return FT_INVALID_ARGUMENT;
+    return guarded(tracker->error, [&] { tracker->tracker.resetNeutral(); });
+}
+
 const char* ft_tracker_last_error(const ft_tracker* tracker) {
     return tracker ? tracker->error.c_str() : "ft_tracker_last_error: no tracker";
 }
