@@ -135,19 +135,22 @@ void OpenSeeFaceEncoder::encode(const FrameResult& frame, double time, std::vect
         const float open = weight(expression, "jawOpen");
         w.f(-weight(expression, "eyeBlinkLeft"));
         w.f(-weight(expression, "eyeBlinkRight"));
-        for (const char* side : {"Left", "Right"}) {
-            const std::string s(side);
-            const float down = weight(expression, ("browDown" + s).c_str());
-            const float outerUp = weight(expression, ("browOuterUp" + s).c_str());
-            const float innerUp = weight(expression, "browInnerUp");
-            w.f(down - innerUp);                         // steepness
-            w.f(0.5f * (innerUp + outerUp) - down);      // up-down
-            w.f(std::fabs(outerUp - innerUp));           // quirk
+        struct Side {
+            const char *browDown, *browOuterUp, *smile, *frown, *stretch;
+        };
+        static constexpr Side kSides[2] = {
+            {"browDownLeft", "browOuterUpLeft", "mouthSmileLeft", "mouthFrownLeft", "mouthStretchLeft"},
+            {"browDownRight", "browOuterUpRight", "mouthSmileRight", "mouthFrownRight", "mouthStretchRight"}};
+        const float innerUp = weight(expression, "browInnerUp");
+        for (const Side& side : kSides) {
+            const float down = weight(expression, side.browDown), outerUp = weight(expression, side.browOuterUp);
+            w.f(down - innerUp);                     // steepness
+            w.f(0.5f * (innerUp + outerUp) - down);  // up-down
+            w.f(std::fabs(outerUp - innerUp));       // quirk
         }
-        for (const char* side : {"Left", "Right"}) {
-            const std::string s(side);
-            w.f(weight(expression, ("mouthSmile" + s).c_str()) - weight(expression, ("mouthFrown" + s).c_str()));
-            w.f(weight(expression, ("mouthStretch" + s).c_str()) - weight(expression, "mouthPucker"));
+        for (const Side& side : kSides) {
+            w.f(weight(expression, side.smile) - weight(expression, side.frown));           // corner up-down
+            w.f(weight(expression, side.stretch) - weight(expression, "mouthPucker"));      // corner in-out
         }
         w.f(open);
         w.f(both("mouthStretchLeft", "mouthStretchRight") - weight(expression, "mouthPucker"));

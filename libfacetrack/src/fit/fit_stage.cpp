@@ -46,6 +46,8 @@ public:
         return std::make_unique<FitFaceState>(basis_, settings_.calibration_frames);
     }
 
+    std::vector<int> estimatedExpressions() const override { return basis_->expressions; }
+
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         auto& s = static_cast<FitFaceState&>(*state);
         if (!face.result.landmarks) return false;

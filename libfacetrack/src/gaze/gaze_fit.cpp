@@ -147,6 +147,7 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
     for (int e = 0; e < 2; ++e) {
         if (!guessed[e] && guessed[1 - e]) a[e] = a[1 - e];
     }
+    // Per thread and sized once: a tracked frame allocates nothing here.
     thread_local Eigen::VectorXf r0(kResiduals), r1(kResiduals);
     thread_local Eigen::MatrixXf J(kResiduals, 4);
     constexpr float h = 0.25f * kDeg;

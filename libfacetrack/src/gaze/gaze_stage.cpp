@@ -73,6 +73,15 @@ std::array<EyeShapes, 2> eyeShapes(const FaceModel& face) {
     return shapes;
 }
 
+std::vector<int> gazeExpressions(const FaceModel& face) {
+    std::vector<int> out;
+    for (const EyeShapes& s : eyeShapes(face)) {
+        for (const int i : {s.blink, s.lookUp, s.lookDown, s.lookIn, s.lookOut, s.wide})
+            if (i >= 0) out.push_back(i);
+    }
+    return out;
+}
+
 class GazeStage final : public pipeline::Stage {
 public:
     GazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face)
@@ -91,6 +100,8 @@ public:
         for (auto& e : s->eyes) e.reference = eyes_->data().open_aperture;
         return s;
     }
+
+    std::vector<int> estimatedExpressions() const override { return gazeExpressions(*face_); }
 
     void resetCalibration(pipeline::StageState* state) const override {
         auto& s = static_cast<GazeFaceState&>(*state);
@@ -255,14 +266,6 @@ private:
 
 }  // namespace
 
-std::vector<int> gazeExpressions(const FaceModel& face) {
-    std::vector<int> out;
-    for (const EyeShapes& s : eyeShapes(face)) {
-        for (const int i : {s.blink, s.lookUp, s.lookDown, s.lookIn, s.lookOut, s.wide})
-            if (i >= 0) out.push_back(i);
-    }
-    return out;
-}
 
 std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
                                                bool haveFit) {

@@ -10,7 +10,8 @@
 // other eye, or holds when both close, so a blink does not move the gaze.
 //
 // Reads: landmarks, pose, identity. Fills: gaze, and the ARKit eye shapes
-// (native eyeBlink, eyeLook*, eyeWide of the face model, ARKit recomputed).
+// (native eyeBlink, eyeLook*, eyeWide of the face model, ARKit recomputed;
+// estimatedExpressions() lists them, and the filter leaves them as they are).
 // Never loses the face.
 
 #include "pipeline/stage.hpp"
@@ -26,10 +27,6 @@ namespace facetrack::gaze {
 /// `eyes` null: the stage is not available. Needs pose (the fit stage).
 std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
                                                bool haveFit);
-
-/// The face model's native expressions the stage writes (eyeBlink, eyeLook*,
-/// eyeWide of both eyes): the filter leaves them as they are.
-std::vector<int> gazeExpressions(const FaceModel& face);
 
 /// Openness -> ARKit weights (docs/gaze.md): eyeBlink = clamp((0.8 - openness) / 0.55),
 /// eyeWide = clamp((ratio - 1.1) / 0.3) with ratio the unclamped aperture ratio;

@@ -84,6 +84,9 @@ public:
     virtual bool run(const FrameInput& frame, FaceTrack& face, StageState* state) = 0;
     /// Forget per-user estimates (Tracker::resetIdentity).
     virtual void resetCalibration(StageState* /*state*/) const {}
+    /// The face model's native expressions this stage estimates (indices into
+    /// FaceModel::expressionNames()); none for stages that write no expression.
+    virtual std::vector<int> estimatedExpressions() const { return {}; }
 };
 
 using StageList = std::vector<std::unique_ptr<Stage>>;

@@ -4,7 +4,6 @@
 #include "facetrack/error.hpp"
 #include "filter/filter_stage.hpp"
 #include "fit/camera.hpp"
-#include "fit/fit_basis.hpp"
 #include "fit/fit_stage.hpp"
 #include "gaze/gaze_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
@@ -57,10 +56,11 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind()));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames}, models.landmarks != nullptr));
     stages.push_back(pipeline::notAvailable("cnn", "the CNN refinement cascade is not built yet"));
-    const bool gaze = models.eyes && models.landmarks;
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
+    // The gaze stage's eye shapes have their own temporal estimate: the filter leaves them as they are.
+    const pipeline::Stage& gazeStage = *stages.back();
     stages.push_back(filter::makeFilterStage(models.face, config.filter,
-                                             gaze ? gaze::gazeExpressions(*models.face) : std::vector<int>{}));
+                                             gazeStage.info().available ? gazeStage.estimatedExpressions() : std::vector<int>{}));
     return stages;
 }
 
@@ -117,17 +117,9 @@ void Tracker::resetNeutral() { impl_->core.calibrateNeutral(false); }
 std::vector<StageInfo> Tracker::stages() const { return impl_->core.stages(); }
 
 std::vector<std::string> Tracker::estimatedShapes() const {
-    // The native expressions the stages write: the fit's observable ones and the gaze stage's eye shapes.
     const FaceModel& face = *impl_->models.face;
     std::vector<float> native(face.expressionNames().size(), 0.f);
-    for (const StageInfo& stage : stages()) {
-        if (!stage.available) continue;
-        if (stage.name == "fit") {
-            for (const int k : face.fitBasis()->expressions) native[static_cast<std::size_t>(k)] = 1.f;
-        } else if (stage.name == "gaze") {
-            for (const int k : gaze::gazeExpressions(face)) native[static_cast<std::size_t>(k)] = 1.f;
-        }
-    }
+    for (const int k : impl_->core.estimatedExpressions()) native[static_cast<std::size_t>(k)] = 1.f;
     const auto arkit = face.toArkit(native);
     std::vector<std::string> names;
     for (std::size_t i = 0; i < arkit.size(); ++i)

@@ -36,6 +36,15 @@ TrackerCore::TrackerCore(std::unique_ptr<FaceDetector> detector, pipeline::Stage
     tracks_.reserve(static_cast<std::size_t>(settings_.max_faces));
 }
 
+std::vector<int> TrackerCore::estimatedExpressions() const {
+    std::vector<int> out;
+    for (const auto& stage : stages_) {
+        if (!stage->info().available) continue;
+        for (const int k : stage->estimatedExpressions()) out.push_back(k);
+    }
+    return out;
+}
+
 std::vector<StageInfo> TrackerCore::stages() const {
     std::vector<StageInfo> out;
     out.push_back({"detect", true,
@@ -108,8 +117,13 @@ namespace {
 /// look directions (a neutral face may look anywhere). No allocation.
 void relativeToNeutral(const ExpressionResult& neutral, const std::vector<bool>& keepNative, ExpressionResult& e) {
     const auto rescale = [](float w, float w0) { return w0 < 0.99f ? std::clamp((w - w0) / (1.f - w0), 0.f, 1.f) : w; };
+    static const auto keepArkit = [] {
+        std::array<bool, kArkitBlendshapeCount> keep{};
+        for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = arkitNames()[k].substr(0, 7) == "eyeLook";
+        return keep;
+    }();
     for (std::size_t k = 0; k < e.arkit.size(); ++k) {
-        if (arkitNames()[k].substr(0, 7) == "eyeLook") continue;
+        if (keepArkit[k]) continue;
         e.arkit[k] = rescale(e.arkit[k], neutral.arkit[k]);
     }
     if (neutral.native.size() != e.native.size()) return;

@@ -41,6 +41,8 @@ public:
 
     /// "detect", "verify", then the stages, in order.
     std::vector<StageInfo> stages() const;
+    /// The native expressions some available stage estimates.
+    std::vector<int> estimatedExpressions() const;
 
 private:
     using Clock = std::chrono::steady_clock;
