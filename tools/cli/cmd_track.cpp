@@ -146,6 +146,8 @@ int runTrack(const std::vector<std::string>& argv) {
         return 0;
     }
     const double maxFrames = args.number("--frames", -1);
+    // --neutral-at S: Tracker::calibrateNeutral() after the first frame at or past S seconds.
+    const double neutralAt = args.number("--neutral-at", -1.0);
     const TrackerConfig config = trackerConfig(args);
     const bool raw = args.has("--raw");
 
@@ -164,8 +166,6 @@ int runTrack(const std::vector<std::string>& argv) {
     cv::VideoWriter video;
     cv::Size videoSize;
 
-    // --neutral-at S: Tracker::calibrateNeutral() after the first frame at or past S seconds.
-    const double neutralAt = args.number("--neutral-at", -1.0);
     bool neutralDone = neutralAt < 0;
     MediaFrame frame;
     int frames = 0, withFace = 0;
