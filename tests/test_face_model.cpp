@@ -229,9 +229,20 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     // The mesh itself is the model's: the convention is the fit's business.
     EXPECT_EQ(bare->vertices({}, {})[100].x, with->vertices({}, {})[100].x);
 
+    // The expression prior: a factor per listed shape, 1 for the others.
+    const auto names = b.expressionNames(with->data());
+    for (std::size_t k = 0; k < names.size(); ++k) {
+        const auto it = c.expression_prior.find(names[k]);
+        EXPECT_EQ(b.expression_prior[static_cast<Eigen::Index>(k)], it == c.expression_prior.end() ? 1.0 : it->second) << names[k];
+        EXPECT_EQ(a.expression_prior[static_cast<Eigen::Index>(k)], 1.0);
+    }
+
     const std::string copy = test::tempPath("convention.ftm");
-    fit::writeLandmarkConvention(copy, c);
+    fit::LandmarkConvention withPrior = c;
+    withPrior.expression_prior["jawOpen"] = 0.25;
+    fit::writeLandmarkConvention(copy, withPrior);
     EXPECT_EQ(fit::readLandmarkConvention(copy).offsets_frontal_cm, c.offsets_frontal_cm);
+    EXPECT_EQ(fit::readLandmarkConvention(copy).expression_prior, withPrior.expression_prior);
     {
         std::fstream f(copy, std::ios::in | std::ios::out | std::ios::binary);
         f.seekp(60);
@@ -242,6 +253,9 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     fit::LandmarkConvention wild = c;
     wild.offsets_frontal_cm(0, 30) = 5.0;
     EXPECT_THROW(fit::writeLandmarkConvention(copy, wild), Error);
+    fit::LandmarkConvention negative = c;
+    negative.expression_prior["jawOpen"] = -1.0;
+    EXPECT_THROW(fit::writeLandmarkConvention(copy, negative), Error);
     std::filesystem::remove(copy);
 }
 

@@ -5,6 +5,7 @@
 #include "test_support.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <numeric>
 #include <random>
 
@@ -215,6 +216,51 @@ TEST(Fit, RecoversPoseAndExpressionOfSyntheticFaces) {
     EXPECT_LE(r.fitted_max, 0.15);
 }
 
+// The shipped learned prior (landmark_convention.ftm, from the dense teacher
+// labels) holds a relaxed face at 0 under landmark noise and still follows a
+// strong smile and an open jaw; it does shrink what it follows (docs/expressions.md).
+TEST(Fit, LearnedPriorKeepsARelaxedFaceNeutralAndFollowsStrongExpressions) {
+    const std::string convention = test::sourceDir() + "/models/landmark_convention.ftm";
+    if (!std::filesystem::exists(convention)) GTEST_SKIP() << "models/landmark_convention.ftm is missing";
+    Scene s;
+    s.model = FaceModel::load(test::shippedFaceModel(), convention);
+    s.basis = s.model->fitBasis();
+    ASSERT_GT(s.basis->expression_prior.maxCoeff(), 1.0) << "the shipped convention carries a learned prior";
+    const auto names = s.basis->expressionNames(s.model->data());
+    auto index = [&](const std::string& name) { return static_cast<int>(std::find(names.begin(), names.end(), name) - names.begin()); };
+    std::mt19937 rng(5);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    fit::FaceFitter fitter(s.basis, {});
+    auto fitted = [&](const Eigen::VectorXd& expression) {
+        fit::FaceParams truth;
+        truth.pose.head<3>() = fit::omegaFromEuler({5.0, -10.0, 3.0});
+        truth.pose.tail<3>() = Eigen::Vector3d(1.0, -2.0, 55.0);
+        truth.expression = expression;
+        fit::Landmarks2d observed = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, truth,
+                                                         fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, truth));
+        for (int i = 0; i < observed.cols(); ++i) observed.col(i) += Eigen::Vector2d(noise(rng), noise(rng));
+        fit::FaceParams p;
+        fitter.fit(s.camera, observed, p, false);
+        return p.expression;
+    };
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(s.basis->expressionCount());
+    for (int trial = 0; trial < 5; ++trial) {
+        const Eigen::VectorXd relaxed = fitted(zero);
+        for (int k = 0; k < relaxed.size(); ++k) {
+            if (names[static_cast<std::size_t>(k)].rfind("eye", 0) == 0) continue;  // the gaze stage's
+            EXPECT_LT(relaxed[k], 0.10) << names[static_cast<std::size_t>(k)];
+        }
+    }
+    Eigen::VectorXd smile = zero;
+    smile[index("mouthSmile_L")] = smile[index("mouthSmile_R")] = 0.8;
+    const Eigen::VectorXd smiled = fitted(smile);
+    EXPECT_GT(smiled[index("mouthSmile_L")], 0.4);
+    EXPECT_GT(smiled[index("mouthSmile_R")], 0.4);
+    Eigen::VectorXd open = zero;
+    open[index("jawOpen")] = 0.6;
+    EXPECT_GT(fitted(open)[index("jawOpen")], 0.4);
+}
+
 // The same, as the tracker runs it: identity calibrated over 30 frames first.
 // Identity is only partly recovered from noisy 2D points, so the bounds are
 // looser (docs/fitting.md reports both).
@@ -286,7 +332,8 @@ protected:
     ceres::GradientChecker::ProbeResults probe(bool withIdentity, int outliers) {
         Landmarks2d observed = frame.observed;
         for (int i = 0; i < outliers; ++i) observed.col(5 * i + 3) += Eigen::Vector2d(0.5 * scale, -0.3 * scale);
-        const fit::LandmarksCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, withIdentity);
+        const fit::PointsCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, fit::landmarkSlots(*s.basis),
+                                  withIdentity);
         // Ridders' extrapolation (what GradientChecker uses) from steps small enough
         // that a residual near the Huber threshold stays on one side of it.
         ceres::NumericDiffOptions options;
@@ -306,7 +353,7 @@ protected:
     double scale = 1.0;
 };
 
-TEST_F(CostGradients, LandmarksCostJacobiansMatchFiniteDifferences) {
+TEST_F(CostGradients, PointsCostJacobiansMatchFiniteDifferences) {
     for (const bool withIdentity : {false, true}) {
         for (const int outliers : {0, 8}) {
             const auto r = probe(withIdentity, outliers);
@@ -322,7 +369,7 @@ TEST_F(CostGradients, OutliersAreInTheLinearPartOfTheLoss) {
     // |e| ~ 0.58 face sizes, so |r| = sqrt(2 delta |e| - delta^2) ~ 0.24, well below |e|.
     Landmarks2d observed = frame.observed;
     observed.col(3) += Eigen::Vector2d(0.5 * scale, -0.3 * scale);
-    const fit::LandmarksCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, false);
+    const fit::PointsCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, fit::landmarkSlots(*s.basis), false);
     const double* blocks[] = {pose.data(), frame.truth.expression.data()};
     Eigen::VectorXd residuals(2 * model::kLandmarkCount);
     ASSERT_TRUE(cost.Evaluate(blocks, residuals.data(), nullptr));

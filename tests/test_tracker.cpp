@@ -311,23 +311,25 @@ TEST(Tracker, CalibrateNeutralMeasuresFromTheUsersNeutralUntilReset) {
     FrameResult after;
     for (int k = 0; k < 3; ++k) tracker.process(core::viewOf(frames.back()), (20 + k) / 25.0, after);
     ASSERT_EQ(after.faces.size(), 1u);
-    const auto& w = after.faces[0].expression->arkit;
+    // The fit's shapes (the gaze stage's eye shapes adapt to the face over frames of their own).
+    const auto fitShape = [](std::size_t k) { return std::string(arkitNames()[k]).rfind("eye", 0) != 0; };
+    const auto w = after.faces[0].expression->arkit;
     const auto& w0 = before.faces[0].expression->arkit;
     float largestBefore = 0.f, largestAfter = 0.f;
     for (std::size_t k = 0; k < w.size(); ++k) {
-        if (std::string(arkitNames()[k]).rfind("eyeLook", 0) == 0) continue;
+        if (!fitShape(k)) continue;
         largestBefore = std::max(largestBefore, w0[k]);
         largestAfter = std::max(largestAfter, w[k]);
     }
-    EXPECT_GT(largestBefore, 0.1f);
-    EXPECT_LT(largestAfter, 0.1f);
+    EXPECT_GT(largestBefore, 0.03f);  // the relaxed face reads a little expression: something to calibrate away
+    EXPECT_LT(largestAfter, 0.25f * largestBefore);
     // Off again: the weights as the fit gives them.
     tracker.resetNeutral();
     tracker.process(core::viewOf(frames.back()), 23 / 25.0, after);
-    float largest = 0.f;
-    for (std::size_t k = 0; k < w.size(); ++k)
-        if (std::string(arkitNames()[k]).rfind("eyeLook", 0) != 0) largest = std::max(largest, after.faces[0].expression->arkit[k]);
-    EXPECT_GT(largest, 0.1f);
+    for (std::size_t k = 0; k < w.size(); ++k) {
+        if (!fitShape(k)) continue;
+        EXPECT_NEAR(after.faces[0].expression->arkit[k], w0[k], 0.02f) << arkitNames()[k];
+    }
 }
 
 TEST(Tracker, SaysWhichShapesItEstimatesAndTheOthersStayZero) {

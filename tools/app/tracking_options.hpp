@@ -16,10 +16,10 @@ namespace facetrack::tools {
 inline const std::set<std::string> kDetectorOptions = {"--detector", "--yunet", "--min-score"};
 DetectorConfig detectorConfig(const Args& args);
 
-/// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --filter-cutoff HZ,
-/// --filter-beta B, and the flag --no-filter.
+/// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --expression-prior F,
+/// --filter-cutoff HZ, --filter-beta B, and the flag --no-filter.
 inline const std::set<std::string> kTrackerOptions = {"--max-faces", "--fov", "--focal", "--calibration-frames",
-                                                      "--filter-cutoff", "--filter-beta"};
+                                                      "--expression-prior", "--filter-cutoff", "--filter-beta"};
 inline const std::set<std::string> kTrackerFlags = {"--no-filter"};
 TrackerConfig trackerConfig(const Args& args);
 

@@ -26,15 +26,17 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage = R"(usage: facetrack eval-expressions [CLIP...] [--labels CSV] [--plot PREFIX] [--no-mirror] [--calibrate-neutral]
-                                 [tracker options]
+                                 [--dense CLIPS_CSV] [tracker options]
 The ARKit-52 weights on hand-labelled segments (default data/expression_labels.csv, clips from
 ../shared/data/clips; with no CLIP, every clip the labels name):
   neutral   per shape, the mean over neutral segments (eyeLook shapes excluded from the worst)
   response  per labelled expression, the mean of its shapes minus their neutral mean
   mirror    mean |left shape (image) - right shape (mirrored image)| over all frames
   yaw       the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg), the largest change
+  dense     with --dense (label_dense's clips.csv): per shape, Pearson r between the tracker and the
+            dense teacher labels over every tracked frame of the clips (teacher labels, not truth)
 Writes PREFIX_neutral.png (per-shape bars) and PREFIX_<clip>.png (time series of the expected
-shapes, labelled segments as steps); PREFIX defaults to expressions. --calibrate-neutral calls
+shapes, with --dense their dense labels too, labelled segments as steps); PREFIX defaults to expressions. --calibrate-neutral calls
 Tracker::calibrateNeutral() at the first frame of each clip's first neutral segment; that frame
 is left out of the neutral figure.)";
 
@@ -114,6 +116,51 @@ Track trackClip(const std::string& path, const TrackerConfig& config, bool mirro
     return t;
 }
 
+/// label_dense's clips.csv as ARKit weights, keyed "CLIP#FRAME".
+std::map<std::string, std::array<float, kArkitBlendshapeCount>> readDenseLabels(const std::string& path, const FaceModel& model) {
+    std::ifstream in(path);
+    if (!in) throw Error("cannot read dense labels '" + path + "'");
+    std::string line;
+    if (!std::getline(in, line)) throw Error(path + ": empty");
+    std::vector<std::string> header;
+    {
+        std::stringstream s(line);
+        for (std::string cell; std::getline(s, cell, ',');) header.push_back(cell);
+    }
+    const auto& native = model.expressionNames();
+    std::vector<int> column(header.size(), -1);  // native index of each column
+    for (std::size_t c = 0; c < header.size(); ++c) {
+        const auto it = std::find(native.begin(), native.end(), header[c]);
+        if (it != native.end()) column[c] = static_cast<int>(it - native.begin());
+    }
+    std::map<std::string, std::array<float, kArkitBlendshapeCount>> out;
+    while (std::getline(in, line)) {
+        std::stringstream s(line);
+        std::string key;
+        std::getline(s, key, ',');
+        std::vector<float> weights(native.size(), 0.f);
+        std::string cell;
+        for (std::size_t c = 1; std::getline(s, cell, ','); ++c) {
+            if (c < column.size() && column[c] >= 0) weights[static_cast<std::size_t>(column[c])] = std::stof(cell);
+        }
+        out[key] = model.toArkit(weights);
+    }
+    return out;
+}
+
+double pearson(const std::vector<double>& a, const std::vector<double>& b) {
+    const double n = static_cast<double>(a.size());
+    double ma = 0, mb = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) ma += a[i] / n, mb += b[i] / n;
+    double sab = 0, saa = 0, sbb = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        sab += (a[i] - ma) * (b[i] - mb);
+        saa += (a[i] - ma) * (a[i] - ma);
+        sbb += (b[i] - mb) * (b[i] - mb);
+    }
+    return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : std::nan("");
+}
+
 std::size_t idx(const std::string& name) { return static_cast<std::size_t>(arkitIndex(name)); }
 
 /// The name of the ARKit shape mirroring `name` (Left <-> Right).
@@ -157,10 +204,80 @@ void barPlot(const std::string& path, const std::array<double, kArkitBlendshapeC
     if (!cv::imwrite(path, img)) throw Error("cannot write '" + path + "'");
 }
 
+/// The neutral segments' mean per shape, and the neutral frames with their |yaw|.
+struct NeutralFigures {
+    std::array<double, kArkitBlendshapeCount> mean{};
+    std::vector<std::pair<float, std::array<float, kArkitBlendshapeCount>>> byYaw;
+};
+
+/// Prints the neutral bias and the responses of `tracks` on the labelled segments.
+/// Neutral: every frame of every neutral segment but the calibrating ones.
+NeutralFigures reportSegments(const std::vector<Segment>& segments, const std::map<std::string, Track>& tracks,
+                              const std::map<std::string, const Segment*>& calibrating) {
+    NeutralFigures figures;
+    auto& neutral = figures.mean;
+    long neutralFrames = 0;
+    for (const auto& s : segments) {
+        if (s.label != "neutral" || !tracks.count(s.clip)) continue;
+        const Track& t = tracks.at(s.clip);
+        for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
+            if (!t.arkit[static_cast<std::size_t>(f)]) continue;
+            if (calibrating.count(s.clip) && f <= calibrating.at(s.clip)->first) continue;  // the calibration frame (and before)
+            for (int k = 0; k < kArkitBlendshapeCount; ++k) neutral[static_cast<std::size_t>(k)] += (*t.arkit[static_cast<std::size_t>(f)])[static_cast<std::size_t>(k)];
+            figures.byYaw.push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *t.arkit[static_cast<std::size_t>(f)]});
+            ++neutralFrames;
+        }
+    }
+    for (auto& v : neutral) v = neutralFrames ? v / static_cast<double>(neutralFrames) : std::nan("");
+    std::printf("neutral (%ld frames): shapes with a mean above 0.10:", neutralFrames);
+    int worst = -1;
+    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
+        const std::string name(arkitNames()[static_cast<std::size_t>(k)]);
+        if (name.rfind("eyeLook", 0) == 0) continue;
+        if (worst < 0 || neutral[static_cast<std::size_t>(k)] > neutral[static_cast<std::size_t>(worst)]) worst = k;
+        if (neutral[static_cast<std::size_t>(k)] > 0.10) std::printf(" %s %.2f", name.c_str(), neutral[static_cast<std::size_t>(k)]);
+    }
+    double total = 0;
+    int counted = 0;
+    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
+        if (std::string(arkitNames()[static_cast<std::size_t>(k)]).rfind("eyeLook", 0) == 0) continue;
+        total += neutral[static_cast<std::size_t>(k)];
+        ++counted;
+    }
+    std::printf("\n  mean over the %d shapes (eyeLook excluded) %.3f; worst: %s %.2f (target: every shape <= 0.10)\n", counted,
+                total / counted, std::string(arkitNames()[static_cast<std::size_t>(worst)]).c_str(),
+                neutral[static_cast<std::size_t>(worst)]);
+
+    // Responses: per label, each expected shape's segment mean minus its neutral mean.
+    std::printf("response (segment mean - neutral mean; target >= 0.4, blink >= 0.6):\n");
+    for (const auto& [label, shapes] : expectedShapes()) {
+        std::vector<double> sums(shapes.size(), 0.0);
+        long frames = 0;
+        for (const auto& s : segments) {
+            if (s.label != label || !tracks.count(s.clip)) continue;
+            const Track& t = tracks.at(s.clip);
+            for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
+                if (!t.arkit[static_cast<std::size_t>(f)]) continue;
+                for (std::size_t k = 0; k < shapes.size(); ++k) sums[k] += (*t.arkit[static_cast<std::size_t>(f)])[idx(shapes[k])];
+                ++frames;
+            }
+        }
+        if (frames == 0) {
+            std::printf("  %-11s no labelled frames\n", label.c_str());
+            continue;
+        }
+        std::printf("  %-11s (%4ld frames):", label.c_str(), frames);
+        for (std::size_t k = 0; k < shapes.size(); ++k)
+            std::printf(" %s %+.2f", shapes[k].c_str(), sums[k] / static_cast<double>(frames) - neutral[idx(shapes[k])]);
+        std::printf("\n");
+    }
+    return figures;
+}
+
 }  // namespace
 
 int runEvalExpressions(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--labels", "--plot"}), {"--help", "--no-filter", "--no-mirror", "--calibrate-neutral"});
+    const Args args(argv, trackingOptions({"--labels", "--plot", "--dense"}), {"--help", "--no-filter", "--no-mirror", "--calibrate-neutral"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -194,64 +311,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
         if (!args.has("--no-mirror")) mirrored[clip] = trackClip(shared + "/data/clips/" + clip, config, true, at);
     }
     if (calibrate) std::printf("neutral calibrated at the first frame of each clip's first neutral segment (%zu clips)\n", calibrating.size());
-    // Neutral: every frame of every neutral segment (but the calibrating ones).
-    std::array<double, kArkitBlendshapeCount> neutral{};
-    long neutralFrames = 0;
-    std::array<std::vector<std::pair<float, std::array<float, kArkitBlendshapeCount>>>, 1> neutralByYaw;
-    for (const auto& s : segments) {
-        if (s.label != "neutral" || !tracks.count(s.clip)) continue;
-        const Track& t = tracks[s.clip];
-        for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
-            if (!t.arkit[static_cast<std::size_t>(f)]) continue;
-            if (calibrating.count(s.clip) && f <= calibrating[s.clip]->first) continue;  // the calibration frame (and before)
-            for (int k = 0; k < kArkitBlendshapeCount; ++k) neutral[static_cast<std::size_t>(k)] += (*t.arkit[static_cast<std::size_t>(f)])[static_cast<std::size_t>(k)];
-            neutralByYaw[0].push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *t.arkit[static_cast<std::size_t>(f)]});
-            ++neutralFrames;
-        }
-    }
-    for (auto& v : neutral) v = neutralFrames ? v / static_cast<double>(neutralFrames) : std::nan("");
-    std::printf("neutral (%ld frames): shapes with a mean above 0.10:", neutralFrames);
-    int worst = -1;
-    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
-        const std::string name(arkitNames()[static_cast<std::size_t>(k)]);
-        if (name.rfind("eyeLook", 0) == 0) continue;
-        if (worst < 0 || neutral[static_cast<std::size_t>(k)] > neutral[static_cast<std::size_t>(worst)]) worst = k;
-        if (neutral[static_cast<std::size_t>(k)] > 0.10) std::printf(" %s %.2f", name.c_str(), neutral[static_cast<std::size_t>(k)]);
-    }
-    double total = 0;
-    int counted = 0;
-    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
-        if (std::string(arkitNames()[static_cast<std::size_t>(k)]).rfind("eyeLook", 0) == 0) continue;
-        total += neutral[static_cast<std::size_t>(k)];
-        ++counted;
-    }
-    std::printf("\n  mean over the %d shapes (eyeLook excluded) %.3f; worst: %s %.2f (target: every shape <= 0.10)\n", counted,
-                total / counted, std::string(arkitNames()[static_cast<std::size_t>(worst)]).c_str(),
-                neutral[static_cast<std::size_t>(worst)]);
-
-    // Responses: per label, each expected shape's segment mean minus its neutral mean.
-    std::printf("response (segment mean - neutral mean; target >= 0.4, blink >= 0.6):\n");
-    for (const auto& [label, shapes] : expectedShapes()) {
-        std::vector<double> sums(shapes.size(), 0.0);
-        long frames = 0;
-        for (const auto& s : segments) {
-            if (s.label != label || !tracks.count(s.clip)) continue;
-            const Track& t = tracks[s.clip];
-            for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
-                if (!t.arkit[static_cast<std::size_t>(f)]) continue;
-                for (std::size_t k = 0; k < shapes.size(); ++k) sums[k] += (*t.arkit[static_cast<std::size_t>(f)])[idx(shapes[k])];
-                ++frames;
-            }
-        }
-        if (frames == 0) {
-            std::printf("  %-11s no labelled frames\n", label.c_str());
-            continue;
-        }
-        std::printf("  %-11s (%4ld frames):", label.c_str(), frames);
-        for (std::size_t k = 0; k < shapes.size(); ++k)
-            std::printf(" %s %+.2f", shapes[k].c_str(), sums[k] / static_cast<double>(frames) - neutral[idx(shapes[k])]);
-        std::printf("\n");
-    }
+    const auto neutralFigures = reportSegments(segments, tracks, calibrating);
+    const auto& neutral = neutralFigures.mean;
     // Mirror consistency: the mirrored clip's right shape against the clip's left shape.
     if (!args.has("--no-mirror")) {
         double sum = 0;
@@ -275,7 +336,7 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     // Head-turn invariance on the neutral frames.
     std::array<std::array<double, kArkitBlendshapeCount>, 3> byBin{};
     std::array<long, 3> binFrames{};
-    for (const auto& [yaw, a] : neutralByYaw[0]) {
+    for (const auto& [yaw, a] : neutralFigures.byYaw) {
         const int bin = std::min(2, static_cast<int>(yaw / 10.f));
         if (yaw > 30.f) continue;
         for (int k = 0; k < kArkitBlendshapeCount; ++k) byBin[static_cast<std::size_t>(bin)][static_cast<std::size_t>(k)] += a[static_cast<std::size_t>(k)];
@@ -294,6 +355,47 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     }
     std::printf("yaw: neutral frames with |yaw| 0-10 / 10-20 / 20-30 deg: %ld / %ld / %ld; largest change of a shape's mean %.2f (%s)\n",
                 binFrames[0], binFrames[1], binFrames[2], drift, driftShape.c_str());
+
+    std::map<std::string, std::array<float, kArkitBlendshapeCount>> dense;
+    if (args.has("--dense")) {
+        dense = readDenseLabels(args.get("--dense"), *Models::loadDefault().face);
+        std::array<std::vector<double>, kArkitBlendshapeCount> ours, theirs;
+        for (const auto& clip : clips) {
+            const Track& t = tracks[clip];
+            for (std::size_t f = 0; f < t.arkit.size(); ++f) {
+                const auto it = dense.find(clip + "#" + std::to_string(f));
+                if (!t.arkit[f] || it == dense.end()) continue;
+                for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
+                    ours[k].push_back((*t.arkit[f])[k]);
+                    theirs[k].push_back(it->second[k]);
+                }
+            }
+        }
+        std::printf("dense teacher labels (%zu frames), Pearson r per shape (target >= 0.8 for the marked *):\n ", ours[0].size());
+        const std::vector<std::string> targets = {"jawOpen", "mouthSmileLeft", "mouthSmileRight", "mouthPucker", "mouthFunnel",
+                                                  "browInnerUp", "browDownLeft", "browDownRight"};
+        int column = 0;
+        for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
+            const std::string name(arkitNames()[k]);
+            if (name.rfind("eyeLook", 0) == 0) continue;
+            const bool target = std::find(targets.begin(), targets.end(), name) != targets.end();
+            std::printf(" %s%s %+.2f", target ? "*" : "", name.c_str(), pearson(ours[k], theirs[k]));
+            if (++column % 6 == 0) std::printf("\n ");
+        }
+        std::printf("\n  (nan: one side is constant, e.g. a shape neither estimates)\n");
+        // The labels themselves on the hand-labelled segments: are they a fair target?
+        std::map<std::string, Track> labelTracks;
+        for (const auto& clip : clips) {
+            Track& t = labelTracks[clip];
+            for (std::size_t f = 0; f < tracks[clip].arkit.size(); ++f) {
+                const auto it = dense.find(clip + "#" + std::to_string(f));
+                t.arkit.push_back(it == dense.end() ? std::nullopt : std::optional(it->second));
+                t.yaw.push_back(0.f);
+            }
+        }
+        std::printf("the dense teacher labels themselves on the labelled segments:\n");
+        reportSegments(segments, labelTracks, {});
+    }
 
     barPlot(prefix + "_neutral.png", neutral, "mean ARKit weight on the labelled neutral segments");
     for (const auto& clip : clips) {
@@ -317,6 +419,13 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
                 for (std::size_t f = 0; f < t.arkit.size(); ++f)
                     if (t.arkit[f]) line.points.push_back({static_cast<double>(f), (*t.arkit[f])[idx(shape)]});
                 plot.series.push_back(line);
+                if (dense.empty()) continue;
+                PlotSeries labelled{shape + " (dense labels)", {}};
+                for (std::size_t f = 0; f < t.arkit.size(); ++f) {
+                    const auto it = dense.find(clip + "#" + std::to_string(f));
+                    if (it != dense.end()) labelled.points.push_back({static_cast<double>(f), it->second[idx(shape)]});
+                }
+                plot.series.push_back(labelled);
             }
         }
         std::string name = clip.substr(0, clip.rfind('.'));

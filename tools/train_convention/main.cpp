@@ -7,7 +7,14 @@
 // depth, is that landmark's offset, averaged with its mirror landmark's; three
 // rounds. Jaw landmarks (0-16) slide along the silhouette and are left alone.
 //
-//   build/tools/train_convention --out models/landmark_convention.ftm
+// With --dense-labels (label_dense's output, issue 16 step 4), also the
+// expression prior: per fitted shape f_j = s g / E[b_j^2], E over the dense
+// teacher labels of the training crops and clips (L/R averaged; g their
+// geometric mean), and the strength s the one whose fits of the 300-W
+// training faces' annotated landmarks come closest to those faces' dense
+// labels. The eye shapes keep 1: the gaze stage owns them.
+//
+//   build/tools/train_convention --out models/landmark_convention.ftm [--dense-labels build/dense_labels]
 
 #include "app/args.hpp"
 #include "common/faces300w.hpp"
@@ -22,13 +29,19 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
 
 using namespace facetrack;
 
 namespace {
 
 struct Face {
+    std::string key;  ///< path relative to the 300-W folder
     fit::Camera camera;
     fit::Landmarks2d observed;
 };
@@ -41,6 +54,7 @@ std::vector<Face> loadFaces(const std::string& root, tools::Split split) {
         const core::Shape2 pts = core::readPts(a.pts);
         if (pts.cols() != model::kLandmarkCount) continue;
         Face f;
+        f.key = std::filesystem::relative(a.image, root).string();
         f.camera = fit::cameraFor(image.cols, image.rows, 60.0, 0.0);
         f.observed = pts.cast<double>();
         faces.push_back(f);
@@ -74,6 +88,58 @@ double fitAll(const std::shared_ptr<const fit::FitBasis>& basis, const fit::FitS
     return residual;
 }
 
+/// label_dense's CSV rows of one split, as column name -> value, keyed by the row's key.
+std::map<std::string, std::map<std::string, double>> readDenseLabelsOfSplit(const std::string& path, const std::string& split) {
+    std::ifstream in(path);
+    if (!in) throw Error("cannot read dense labels '" + path + "' (build/tools/label_dense makes them)");
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> header;
+    for (std::stringstream h(line); std::getline(h, line, ',');) header.push_back(line);
+    std::map<std::string, std::map<std::string, double>> rows;
+    while (std::getline(in, line)) {
+        std::vector<std::string> cells;
+        for (std::stringstream c(line); std::getline(c, line, ',');) cells.push_back(line);
+        if (cells.size() != header.size() || cells[1] != split) continue;
+        auto& row = rows[cells[0]];
+        for (std::size_t k = 2; k < cells.size(); ++k) row[header[k]] = std::stod(cells[k]);
+    }
+    return rows;
+}
+
+std::map<std::string, std::map<std::string, double>> readDenseLabels(const std::string& path) {
+    return readDenseLabelsOfSplit(path, "train");
+}
+
+/// The mirror partner's name ("mouthSmile_L" <-> "mouthSmile_R", "mouthLeft" <-> "mouthRight"), or the name.
+std::string partnerOf(const std::string& name) {
+    for (const auto& [a, b] : {std::pair<std::string, std::string>{"_L", "_R"}, {"_R", "_L"}, {"Left", "Right"}, {"Right", "Left"}}) {
+        if (name.size() > a.size() && name.compare(name.size() - a.size(), a.size(), a) == 0) return name.substr(0, name.size() - a.size()) + b;
+    }
+    return name;
+}
+
+/// Mean squared difference between the fits of `faces` and their dense labels, over the non-eye fitted shapes.
+double labelError(const std::shared_ptr<const fit::FitBasis>& basis, const std::vector<std::string>& names, const std::vector<Face>& faces,
+                  const std::map<std::string, std::map<std::string, double>>& labels) {
+    fit::FaceFitter fitter(basis, fit::FitSettings());
+    double sum = 0.0;
+    long n = 0;
+    for (const Face& f : faces) {
+        const auto label = labels.find(f.key);
+        if (label == labels.end()) continue;
+        fit::FaceParams p;
+        fitter.fit(f.camera, f.observed, p, false);
+        for (std::size_t k = 0; k < names.size(); ++k) {
+            if (names[k].rfind("eye", 0) == 0) continue;
+            const double d = p.expression[static_cast<Eigen::Index>(k)] - label->second.at(names[k]);
+            sum += d * d;
+            ++n;
+        }
+    }
+    return n ? sum / static_cast<double>(n) : std::nan("");
+}
+
 double median(std::vector<double> v) {
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
@@ -83,9 +149,9 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
     try {
-        const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--out", "--rounds"}, {"--help"});
+        const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--out", "--rounds", "--dense-labels"}, {"--help"});
         if (args.has("--help")) {
-            std::puts("usage: train_convention [--out models/landmark_convention.ftm] [--rounds 3]");
+            std::puts("usage: train_convention [--out models/landmark_convention.ftm] [--rounds 3] [--dense-labels DIR]");
             return 0;
         }
         const auto model = FaceModel::load(FaceModel::defaultPath());  // the bare model: no convention yet
@@ -124,6 +190,55 @@ int main(int argc, char** argv) {
             }
             std::printf("round %d: pose-only residual before %.4f eye-corner distances; largest offset change %.2f mm\n", round + 1,
                         residual, 10.0 * moved);
+        }
+        if (args.has("--dense-labels")) {
+            const std::string dir = args.get("--dense-labels");
+            const auto labels = readDenseLabels(dir + "/faces300w.csv");
+            const auto clipLabels = readDenseLabels(dir + "/clips.csv");
+            const auto names = basis.expressionNames(model->data());
+            std::vector<double> moment(names.size(), 0.0);
+            for (const auto* set : {&labels, &clipLabels})
+                for (const auto& [key, row] : *set)
+                    for (std::size_t k = 0; k < names.size(); ++k)
+                        moment[k] += std::pow(row.at(names[k]), 2) / static_cast<double>(labels.size() + clipLabels.size());
+            std::vector<double> symmetric(names.size());
+            double logMean = 0.0;
+            int counted = 0;
+            for (std::size_t k = 0; k < names.size(); ++k) {
+                const auto partner = std::find(names.begin(), names.end(), partnerOf(names[k]));
+                symmetric[k] = std::max(1e-4, 0.5 * (moment[k] + moment[static_cast<std::size_t>(partner - names.begin())]));
+                if (names[k].rfind("eye", 0) == 0) continue;
+                logMean += std::log(symmetric[k]);
+                ++counted;
+            }
+            const double g = std::exp(logMean / counted);
+            std::printf("expression prior from %zu + %zu labelled training crops and frames (dense teacher labels, not truth):\n",
+                        labels.size(), clipLabels.size());
+            const auto flat = std::make_shared<const fit::FitBasis>(basis);
+            double bestStrength = 0.0, bestError = labelError(flat, names, train, labels);
+            std::printf("  flat prior: mean squared difference to the labels on the training faces %.4f\n", bestError);
+            for (const double strength : {1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0}) {
+                fit::FitBasis withPrior = basis;
+                for (std::size_t k = 0; k < names.size(); ++k)
+                    if (names[k].rfind("eye", 0) != 0) withPrior.expression_prior[static_cast<Eigen::Index>(k)] = strength * g / symmetric[k];
+                const double error = labelError(std::make_shared<const fit::FitBasis>(withPrior), names, train, labels);
+                std::printf("  strength %5.0f: %.4f\n", strength, error);
+                if (error < bestError) bestError = error, bestStrength = strength;
+            }
+            if (bestStrength > 0.0) {
+                for (std::size_t k = 0; k < names.size(); ++k) {
+                    if (names[k].rfind("eye", 0) == 0) continue;
+                    const double f = bestStrength * g / symmetric[k];
+                    convention.expression_prior[names[k]] = f;
+                    basis.expression_prior[static_cast<Eigen::Index>(k)] = f;
+                    std::printf("  %-16s E[b^2] %.4f  factor %.2f\n", names[k].c_str(), symmetric[k], f);
+                }
+            }
+            std::printf("  chosen strength %.0f (0: the flat prior)\n", bestStrength);
+            std::printf("  300-W validation: flat %.4f, chosen %.4f\n",
+                        labelError(flat, names, validation, readDenseLabelsOfSplit(dir + "/faces300w.csv", "validation")),
+                        labelError(std::make_shared<const fit::FitBasis>(basis), names, validation,
+                                   readDenseLabelsOfSplit(dir + "/faces300w.csv", "validation")));
         }
         // What it changes on held-out faces, with the tracker's own fit settings.
         const fit::FitSettings settings;

@@ -78,6 +78,7 @@ typedef struct ft_tracker_config {
     float filter_min_cutoff_hz;   /* (1) */
     float filter_beta;            /* (2) */
     int32_t calibration_frames;   /* identity from this many samples; 0: mean face (30) */
+    float expression_prior;       /* factor on the fit's learned expression prior, (0, 100] (1) */
 } ft_tracker_config;
 
 typedef struct ft_timing {

@@ -81,6 +81,10 @@ struct TrackerConfig {
     /// Estimate the user's identity from this many well-fitted frames (one
     /// taken every 5 frames), then freeze it. 0: keep the mean face.
     int calibration_frames = 30;
+    /// A factor on the fit's expression prior (learned from the dense teacher
+    /// labels, docs/expressions.md): below 1 the expressions respond more and
+    /// a relaxed face reads less relaxed; above 1 the other way. In (0, 100].
+    float expression_prior = 1.0f;
 };
 
 /// One Tracker follows the faces of one video stream. It is not thread-safe:

@@ -108,6 +108,7 @@ void ft_tracker_config_init(ft_tracker_config* config) {
     config->filter_min_cutoff_hz = static_cast<float>(defaults.filter.min_cutoff_hz);
     config->filter_beta = static_cast<float>(defaults.filter.beta);
     config->calibration_frames = defaults.calibration_frames;
+    config->expression_prior = defaults.expression_prior;
 }
 
 ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* config, ft_tracker** out, char* error,
@@ -138,6 +139,7 @@ ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* co
         t.filter.min_cutoff_hz = c.filter_min_cutoff_hz;
         t.filter.beta = c.filter_beta;
         t.calibration_frames = c.calibration_frames;
+        t.expression_prior = c.expression_prior;
         *out = new ft_tracker{facetrack::Tracker(models->models, t), {}, {}};
     });
     writeError(error, error_size, message);

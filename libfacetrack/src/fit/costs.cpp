@@ -7,17 +7,20 @@
 
 namespace facetrack::fit {
 
-LandmarksCost::LandmarksCost(const Inputs& inputs, bool withIdentity) : in_(inputs), with_identity_(withIdentity) {
-    slots_ = in_.basis->landmark_slots;
-    set_num_residuals(2 * kCount);
+std::vector<int> landmarkSlots(const FitBasis& basis) { return {basis.landmark_slots.begin(), basis.landmark_slots.end()}; }
+
+PointsCost::PointsCost(const Inputs& inputs, std::vector<int> slots, bool withIdentity)
+    : in_(inputs), slots_(std::move(slots)), with_identity_(withIdentity) {
+    set_num_residuals(2 * pointCount());
     auto* sizes = mutable_parameter_block_sizes();
     sizes->push_back(6);
     sizes->push_back(in_.basis->expressionCount());
     if (with_identity_) sizes->push_back(in_.basis->identityCount());
 }
 
-bool LandmarksCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-    const FitBasis& basis = *in_.basis;
+bool PointsCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+    const PointBasis& basis = *in_.basis;
+    const int count = pointCount();
     const int expressions = basis.expressionCount();
     const int identities = basis.identityCount();
     const double* pose = parameters[0];
@@ -40,8 +43,8 @@ bool LandmarksCost::Evaluate(double const* const* parameters, double* residuals,
     const Camera& cam = *in_.camera;
     const double invScale = 1.0 / *in_.scale;
     const double delta2 = in_.huber * in_.huber;
-    for (int i = 0; i < kCount; ++i) {
-        const int slot = slots_[i];
+    for (int i = 0; i < count; ++i) {
+        const int slot = slots_[static_cast<std::size_t>(i)];
         const auto rowsD = basis.expression.middleRows<3>(3 * slot);
         Eigen::Vector3d x = in_.base->col(slot);
         x.noalias() += rowsD * b;
@@ -73,18 +76,18 @@ bool LandmarksCost::Evaluate(double const* const* parameters, double* residuals,
             dProj = (c * Eigen::Matrix2d::Identity() + 2.0 * dc * e * e.transpose()) * dProj;
         }
         if (jacobians[0]) {
-            Eigen::Map<Eigen::Matrix<double, 2 * kCount, 6, Eigen::RowMajor>> j(jacobians[0]);
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>> j(jacobians[0], 2 * count, 6);
             for (int d = 0; d < 3; ++d) j.block<2, 1>(2 * i, d) = dProj * (dRotation[d] * x);
             j.block<2, 3>(2 * i, 3) = dProj;
         }
         const Eigen::Matrix<double, 2, 3> dX = dProj * rotation;
         if (jacobians[1]) {
-            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[1], 2 * kCount, expressions)
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[1], 2 * count, expressions)
                 .middleRows<2>(2 * i)
                 .noalias() = dX * rowsD;
         }
         if (with_identity_ && jacobians[2]) {
-            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[2], 2 * kCount, identities)
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[2], 2 * count, identities)
                 .middleRows<2>(2 * i)
                 .noalias() = dX * basis.identity.middleRows<3>(3 * slot);
         }
@@ -92,16 +95,18 @@ bool LandmarksCost::Evaluate(double const* const* parameters, double* residuals,
     return true;
 }
 
-ShrinkToZero::ShrinkToZero(int size, double weight) : size_(size), sqrt_weight_(std::sqrt(std::max(weight, 0.0))) {
-    set_num_residuals(size);
-    mutable_parameter_block_sizes()->push_back(size);
+ShrinkToZero::ShrinkToZero(int size, double weight) : ShrinkToZero(Eigen::VectorXd::Constant(size, weight)) {}
+
+ShrinkToZero::ShrinkToZero(const Eigen::VectorXd& weights) : sqrt_weights_(weights.cwiseMax(0.0).cwiseSqrt()) {
+    set_num_residuals(static_cast<int>(weights.size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(weights.size()));
 }
 
 bool ShrinkToZero::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-    for (int k = 0; k < size_; ++k) residuals[k] = sqrt_weight_ * parameters[0][k];
+    const auto n = sqrt_weights_.size();
+    Eigen::Map<Eigen::VectorXd>(residuals, n) = sqrt_weights_.cwiseProduct(Eigen::Map<const Eigen::VectorXd>(parameters[0], n));
     if (jacobians && jacobians[0]) {
-        Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[0], size_, size_) =
-            Eigen::MatrixXd::Identity(size_, size_) * sqrt_weight_;
+        Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[0], n, n) = sqrt_weights_.asDiagonal();
     }
     return true;
 }

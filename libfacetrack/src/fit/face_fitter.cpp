@@ -43,7 +43,7 @@ Eigen::Matrix<double, 6, 1> poseTemporalWeights(const FitSettings& s) {
 
 double eyeCornerDistance(const Landmarks2d& points) { return (points.col(36) - points.col(45)).norm(); }
 
-void slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x) {
+void slotPositions(const PointBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x) {
     x = base;
     if (expression.size() == basis.expressionCount() && expression.size() > 0) {
         Eigen::Map<Eigen::VectorXd>(x.data(), x.size()).noalias() += basis.expression * expression;
@@ -125,10 +125,11 @@ FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings&
     double* pose = current_.pose.data();
     double* expression = current_.expression.data();
     problem_ = std::make_unique<ceres::Problem>();
-    landmarks_ = new LandmarksCost({basis_.get(), &base_, &camera_, observed_.data(), &scale_, settings_.huber}, false);
+    landmarks_ = new PointsCost({basis_.get(), &base_, &camera_, observed_.data(), &scale_, settings_.huber}, landmarkSlots(*basis_), false);
     problem_->AddResidualBlock(landmarks_, nullptr, pose, expression);
     // Cold fits only: no previous frame, so no temporal prior here.
-    problem_->AddResidualBlock(new ShrinkToZero(expressions, settings_.expression_l2), nullptr, expression);
+    expression_weights_ = basis_->expressionPriorWeights(settings_.expression_l2);
+    problem_->AddResidualBlock(new ShrinkToZero(expression_weights_), nullptr, expression);
     boundExpressions(*problem_, expression, expressions);
 
     residuals_.resize(2 * model::kLandmarkCount);
@@ -150,7 +151,7 @@ double FaceFitter::objective(Eigen::MatrixXd* jacobian) {
     // The priors are diagonal quadratics, added here directly.
     const double wT = settings_.expression_temporal;
     const Eigen::VectorXd& b = current_.expression;
-    cost += settings_.expression_l2 * b.squaredNorm() + wT * (b - previous_expression_).squaredNorm();
+    cost += expression_weights_.dot(b.cwiseAbs2()) + wT * (b - previous_expression_).squaredNorm();
     const Eigen::Matrix<double, 6, 1> wP = poseTemporalWeights(settings_);
     cost += (wP.array() * (current_.pose - previous_pose_).array().square()).sum();
     if (jacobian) {
@@ -174,8 +175,8 @@ int FaceFitter::solveWarm(int iterations) {
         gradient_.noalias() = jacobian_.transpose() * residuals_;
         normal_.diagonal().head<6>() += wP;
         gradient_.head<6>() += wP.cwiseProduct(current_.pose - previous_pose_);
-        normal_.diagonal().tail(e).array() += settings_.expression_l2 + wT;
-        gradient_.tail(e) += settings_.expression_l2 * current_.expression + wT * (current_.expression - previous_expression_);
+        normal_.diagonal().tail(e).array() += expression_weights_.array() + wT;
+        gradient_.tail(e) += expression_weights_.cwiseProduct(current_.expression) + wT * (current_.expression - previous_expression_);
 
         const Pose6 pose = current_.pose;
         expression_before_step_ = current_.expression;
@@ -310,10 +311,12 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
         auto& frame = frames[f];
         if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
         scales[f] = std::max(eyeCornerDistance(frame.observed), 1.0);
-        auto* cost = new LandmarksCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber}, true);
+        auto* cost = new PointsCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber},
+                                     landmarkSlots(basis), true);
         for (int i = 0; i < kJaw; ++i) cost->setSlot(i, frame.contour[i]);
         problem.AddResidualBlock(cost, nullptr, frame.params.pose.data(), frame.params.expression.data(), identity.data());
-        problem.AddResidualBlock(new ShrinkToZero(expressions, settings.expression_l2), nullptr, frame.params.expression.data());
+        problem.AddResidualBlock(new ShrinkToZero(basis.expressionPriorWeights(settings.expression_l2)), nullptr,
+                                 frame.params.expression.data());
         boundExpressions(problem, frame.params.expression.data(), expressions);
     }
     ceres::Solver::Summary summary;

@@ -52,7 +52,7 @@ using Pose6 = Eigen::Matrix<double, 6, 1>;  ///< (omega, t) as in FaceParams
 
 /// X_s = base_s + D_s b for every slot (3 x S, frontal frame, cm), into `x`
 /// (no allocation once `x` has the size).
-void slotPositions(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x);
+void slotPositions(const PointBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x);
 
 /// The 68 landmarks slot positions `x` project to under `pose`, jaw points at `contour`.
 Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
@@ -126,10 +126,11 @@ private:
     FaceParams current_;
     Pose6 previous_pose_;
     Eigen::VectorXd previous_expression_;
+    Eigen::VectorXd expression_weights_;  // w_l2 per expression (FitBasis::expressionPriorWeights)
     Eigen::Matrix3Xd slots_;  // slot positions at current_.expression
 
     std::unique_ptr<ceres::Problem> problem_;
-    LandmarksCost* landmarks_ = nullptr;
+    PointsCost* landmarks_ = nullptr;
 
     // solveWarm's buffers, sized once.
     Eigen::VectorXd residuals_;

@@ -30,44 +30,67 @@ std::string mirrorName(const std::string& name) {
     return "";
 }
 
-/// The observable expressions. J holds, for a frontal face seen
-/// orthographically, the image-plane landmark motion (in eye-corner
-/// distances) of 6 pose directions (tx, ty, scale, three rotations) and of
-/// each expression. The distinct motion of column j within J is
-/// 1 / sqrt((J^T J)^{-1}_jj), its distance from the span of the others.
-/// Repeatedly drop the least distinct expression, with its mirror partner,
-/// until every remaining one reaches kMinDistinctMotion.
-std::vector<int> observableExpressions(const model::FaceModelData& data) {
+}  // namespace
+
+Eigen::Matrix3d modelToFrontal() { return Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal(); }
+
+std::vector<std::string> PointBasis::expressionNames(const model::FaceModelData& data) const {
+    std::vector<std::string> names;
+    for (const int e : expressions) names.push_back(data.expressions[e].name);
+    return names;
+}
+
+// The observability rule. J holds, for a frontal face seen orthographically,
+// the image-plane motion of the points (in eye-corner distances) under 6 pose
+// directions (tx, ty, scale, three rotations) and under each expression. The
+// distinct motion of column j within J is 1 / sqrt((J^T J)^{-1}_jj), its
+// distance from the span of the others. Repeatedly drop the least distinct
+// expression, with its mirror partner, until every remaining one reaches
+// kMinDistinctMotion.
+namespace {
+
+/// J of the comment above for all expressions (columns 6.. are data.expressions).
+Eigen::MatrixXd motionMatrix(const model::FaceModelData& data, const std::vector<SurfacePoint>& points) {
     const auto& lm = data.landmark_vertices;
     const double eyes = (data.neutral.col(lm[36]) - data.neutral.col(lm[45])).norm();
-    std::vector<int> kept;
-    for (int e = 0; e < static_cast<int>(data.expressions.size()); ++e) {
-        // Eyeball rotation belongs to the gaze stage.
-        if (data.expressions[e].name.rfind("eyeLook", 0) != 0) kept.push_back(e);
-    }
+    std::vector<int> all_expressions(data.expressions.size());
+    for (std::size_t e = 0; e < all_expressions.size(); ++e) all_expressions[e] = static_cast<int>(e);
+    const PointBasis rows = buildPointBasis(data, points, all_expressions);
     constexpr int kPose = 6;
-    Eigen::MatrixXd all(2 * model::kLandmarkCount, kPose + data.expressions.size());
-    all.setZero();
-    for (int i = 0; i < model::kLandmarkCount; ++i) {
-        const Eigen::Vector3d x = data.neutral.col(lm[i]).cast<double>() / eyes;
+    const auto n = static_cast<Eigen::Index>(points.size());
+    Eigen::MatrixXd all(2 * n, kPose + rows.expressionCount());
+    for (Eigen::Index i = 0; i < n; ++i) {
+        // The frontal frame's y is the model's -y: that flips only signs, not distinctness.
+        const Eigen::Vector3d x = rows.neutral.col(i) / eyes;
         all.block<2, kPose>(2 * i, 0) << 1, 0, x.x(), 0, x.z(), -x.y(),  //
             0, 1, x.y(), -x.z(), 0, x.x();
-        for (std::size_t e = 0; e < data.expressions.size(); ++e) {
-            const auto& shape = data.expressions[e];
-            const auto it = std::lower_bound(shape.vertices.begin(), shape.vertices.end(), lm[i]);
-            if (it == shape.vertices.end() || *it != lm[i]) continue;
-            all.block<2, 1>(2 * i, kPose + e) = shape.deltas.col(it - shape.vertices.begin()).head<2>().cast<double>() / eyes;
-        }
+        all.block(2 * i, kPose, 2, rows.expressionCount()) = rows.expression.middleRows<2>(3 * i) / eyes;
     }
+    return all;
+}
+
+/// 1 / sqrt((J^T J)^{-1}_jj) for the columns of `kept`, with the pose.
+Eigen::VectorXd distinctMotionOf(const Eigen::MatrixXd& all, const std::vector<int>& kept) {
+    constexpr int kPose = 6;
+    Eigen::MatrixXd j(all.rows(), kPose + static_cast<Eigen::Index>(kept.size()));
+    j.leftCols(kPose) = all.leftCols(kPose);
+    for (std::size_t k = 0; k < kept.size(); ++k) j.col(kPose + static_cast<Eigen::Index>(k)) = all.col(kPose + kept[k]);
+    const Eigen::MatrixXd gram = j.transpose() * j + 1e-12 * Eigen::MatrixXd::Identity(j.cols(), j.cols());
+    const Eigen::VectorXd inverseDiagonal = gram.ldlt().solve(Eigen::MatrixXd::Identity(j.cols(), j.cols())).diagonal();
+    return inverseDiagonal.tail(static_cast<Eigen::Index>(kept.size())).cwiseSqrt().cwiseInverse();
+}
+
+}  // namespace
+
+std::vector<int> observableExpressions(const model::FaceModelData& data, const std::vector<SurfacePoint>& points) {
+    std::vector<int> kept;
+    for (int e = 0; e < static_cast<int>(data.expressions.size()); ++e) {
+        if (data.expressions[e].name.rfind("eyeLook", 0) != 0) kept.push_back(e);
+    }
+    const Eigen::MatrixXd all = motionMatrix(data, points);
     while (!kept.empty()) {
-        Eigen::MatrixXd j(all.rows(), kPose + kept.size());
-        j.leftCols(kPose) = all.leftCols(kPose);
-        for (std::size_t k = 0; k < kept.size(); ++k) j.col(kPose + k) = all.col(kPose + kept[k]);
-        const Eigen::MatrixXd gram = j.transpose() * j + 1e-12 * Eigen::MatrixXd::Identity(j.cols(), j.cols());
-        const Eigen::VectorXd inverseDiagonal = gram.ldlt().solve(Eigen::MatrixXd::Identity(j.cols(), j.cols())).diagonal();
         Eigen::Index worst = 0;
-        const double largest = inverseDiagonal.tail(kept.size()).maxCoeff(&worst);
-        if (1.0 / std::sqrt(largest) >= kMinDistinctMotion) break;
+        if (distinctMotionOf(all, kept).minCoeff(&worst) >= kMinDistinctMotion) break;
         const std::string partner = mirrorName(data.expressions[kept[worst]].name);
         kept.erase(kept.begin() + worst);
         std::erase_if(kept, [&](int e) { return !partner.empty() && data.expressions[e].name == partner; });
@@ -75,49 +98,68 @@ std::vector<int> observableExpressions(const model::FaceModelData& data) {
     return kept;
 }
 
-}  // namespace
+std::vector<double> distinctMotion(const model::FaceModelData& data, const std::vector<SurfacePoint>& points,
+                                   const std::vector<int>& expressions) {
+    const Eigen::VectorXd d = distinctMotionOf(motionMatrix(data, points), expressions);
+    return {d.data(), d.data() + d.size()};
+}
 
-Eigen::Matrix3d modelToFrontal() { return Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal(); }
-
-std::vector<std::string> FitBasis::expressionNames(const model::FaceModelData& data) const {
-    std::vector<std::string> names;
-    for (const int e : expressions) names.push_back(data.expressions[e].name);
-    return names;
+PointBasis buildPointBasis(const model::FaceModelData& data, const std::vector<SurfacePoint>& points,
+                           const std::vector<int>& expressions) {
+    PointBasis b;
+    b.native_expression_count = static_cast<int>(data.expressions.size());
+    b.expressions = expressions;
+    const auto slots = static_cast<Eigen::Index>(points.size());
+    const Eigen::Matrix3d r0 = modelToFrontal();
+    b.neutral.setZero(3, slots);
+    b.identity.setZero(3 * slots, data.identityCount());
+    b.expression.setZero(3 * slots, static_cast<Eigen::Index>(expressions.size()));
+    for (Eigen::Index s = 0; s < slots; ++s) {
+        const SurfacePoint& p = points[static_cast<std::size_t>(s)];
+        for (int c = 0; c < 3; ++c) {
+            const std::uint32_t v = p.vertices[c];
+            const double w = p.weights[c];
+            if (w == 0.0) continue;
+            b.neutral.col(s) += w * (r0 * data.neutral.col(v).cast<double>());
+            b.identity.middleRows<3>(3 * s) += w * (r0 * data.identity_basis.middleRows<3>(3 * v).cast<double>());
+            for (std::size_t k = 0; k < expressions.size(); ++k) {
+                const auto& shape = data.expressions[static_cast<std::size_t>(expressions[k])];
+                const auto it = std::lower_bound(shape.vertices.begin(), shape.vertices.end(), v);
+                if (it == shape.vertices.end() || *it != v) continue;
+                b.expression.block<3, 1>(3 * s, static_cast<Eigen::Index>(k)) +=
+                    w * (r0 * shape.deltas.col(it - shape.vertices.begin()).cast<double>());
+            }
+        }
+    }
+    return b;
 }
 
 FitBasis buildFitBasis(const model::FaceModelData& data) {
-    FitBasis b;
-    b.native_expression_count = static_cast<int>(data.expressions.size());
     const auto& lm = data.landmark_vertices;
-    b.expressions = observableExpressions(data);
-
+    std::vector<std::uint32_t> vertices;
+    std::array<int, model::kLandmarkCount> landmark_slots{};
+    std::array<std::vector<int>, model::kContourLandmarkCount> contour_slots;
     std::map<std::uint32_t, int> slotOf;
     auto slot = [&](std::uint32_t v) {
-        const auto [it, added] = slotOf.emplace(v, static_cast<int>(b.vertices.size()));
-        if (added) b.vertices.push_back(v);
+        const auto [it, added] = slotOf.emplace(v, static_cast<int>(vertices.size()));
+        if (added) vertices.push_back(v);
         return it->second;
     };
-    for (int i = 0; i < model::kLandmarkCount; ++i) b.landmark_slots[i] = slot(lm[i]);
+    for (int i = 0; i < model::kLandmarkCount; ++i) landmark_slots[i] = slot(lm[i]);
     for (int i = 0; i < model::kContourLandmarkCount; ++i) {
-        for (const std::uint32_t v : data.contour_candidates[i]) b.contour_slots[i].push_back(slot(v));
+        for (const std::uint32_t v : data.contour_candidates[i]) contour_slots[i].push_back(slot(v));
     }
+    std::vector<SurfacePoint> points(vertices.size());
+    for (std::size_t s = 0; s < vertices.size(); ++s) points[s].vertices = {vertices[s], vertices[s], vertices[s]};
+    std::vector<SurfacePoint> landmarks(model::kLandmarkCount);
+    for (int i = 0; i < model::kLandmarkCount; ++i) landmarks[i].vertices = {lm[i], lm[i], lm[i]};
 
-    const int slots = b.slotCount();
-    const Eigen::Matrix3d r0 = modelToFrontal();
-    b.neutral.resize(3, slots);
-    b.identity.resize(3 * slots, data.identityCount());
-    b.expression.setZero(3 * slots, static_cast<Eigen::Index>(b.expressions.size()));
-    for (int s = 0; s < slots; ++s) {
-        const std::uint32_t v = b.vertices[s];
-        b.neutral.col(s) = r0 * data.neutral.col(v).cast<double>();
-        b.identity.middleRows<3>(3 * s) = r0 * data.identity_basis.middleRows<3>(3 * v).cast<double>();
-        for (std::size_t k = 0; k < b.expressions.size(); ++k) {
-            const auto& shape = data.expressions[b.expressions[k]];
-            const auto it = std::lower_bound(shape.vertices.begin(), shape.vertices.end(), v);
-            if (it == shape.vertices.end() || *it != v) continue;
-            b.expression.block<3, 1>(3 * s, k) = r0 * shape.deltas.col(it - shape.vertices.begin()).cast<double>();
-        }
-    }
+    FitBasis b;
+    static_cast<PointBasis&>(b) = buildPointBasis(data, points, observableExpressions(data, landmarks));
+    b.vertices = std::move(vertices);
+    b.landmark_slots = landmark_slots;
+    b.contour_slots = std::move(contour_slots);
+    b.expression_prior = Eigen::VectorXd::Ones(b.expressionCount());
     for (int i = 0; i < model::kContourLandmarkCount; ++i) {
         const bool chin = i >= 6 && i <= 10;
         const double side = b.neutral(0, b.landmark_slots[i]) < 0.0 ? -1.0 : 1.0;
@@ -126,7 +168,12 @@ FitBasis buildFitBasis(const model::FaceModelData& data) {
     return b;
 }
 
-Eigen::Matrix3Xd shapeWithIdentity(const FitBasis& basis, const Eigen::VectorXd& identity) {
+Eigen::VectorXd FitBasis::expressionPriorWeights(double l2) const {
+    return expression_prior.size() == expressionCount() ? Eigen::VectorXd(l2 * expression_prior)
+                                                        : Eigen::VectorXd::Constant(expressionCount(), l2);
+}
+
+Eigen::Matrix3Xd shapeWithIdentity(const PointBasis& basis, const Eigen::VectorXd& identity) {
     Eigen::Matrix3Xd shape = basis.neutral;
     if (identity.size() == 0) return shape;
     const Eigen::VectorXd offsets = basis.identity * identity;

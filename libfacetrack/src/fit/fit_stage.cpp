@@ -15,8 +15,8 @@ constexpr double kMinDepthCm = 10.0, kMaxDepthCm = 1000.0;
 constexpr int kCalibrationStride = 5;  // frames between identity calibration samples
 
 struct FitFaceState final : pipeline::StageState {
-    FitFaceState(const std::shared_ptr<const FitBasis>& basis, int calibrationFrames)
-        : fitter(basis, FitSettings{}), window(static_cast<std::size_t>(calibrationFrames)) {
+    FitFaceState(const std::shared_ptr<const FitBasis>& basis, const FitSettings& fitSettings, int calibrationFrames)
+        : fitter(basis, fitSettings), window(static_cast<std::size_t>(calibrationFrames)) {
         // Sized up front, so that taking a sample copies into place.
         for (auto& frame : window) frame.params.expression = Eigen::VectorXd::Zero(basis->expressionCount());
     }
@@ -43,7 +43,9 @@ public:
     }
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override {
-        return std::make_unique<FitFaceState>(basis_, settings_.calibration_frames);
+        FitSettings fitSettings;
+        fitSettings.expression_l2 *= settings_.expression_prior;
+        return std::make_unique<FitFaceState>(basis_, fitSettings, settings_.calibration_frames);
     }
 
     std::vector<int> estimatedExpressions() const override { return basis_->expressions; }

@@ -3,12 +3,16 @@
 #include "core/binary_io.hpp"
 #include "fit/fit_basis.hpp"
 
+#include <cmath>
+
 namespace facetrack::fit {
 
 namespace {
 void validate(const LandmarkConvention& c, const std::string& what) {
     if (!c.offsets_frontal_cm.allFinite() || c.offsets_frontal_cm.cwiseAbs().maxCoeff() > 3.0)
         throw Error(what + ": corrupt: offsets not finite or over 3 cm");
+    for (const auto& [name, factor] : c.expression_prior)
+        if (!std::isfinite(factor) || !(factor > 0.0) || name.empty()) throw Error(what + ": corrupt expression prior '" + name + "'");
 }
 }  // namespace
 
@@ -17,6 +21,11 @@ void writeLandmarkConvention(const std::string& path, const LandmarkConvention& 
     core::BinaryWriter w;
     w.put<std::uint32_t>(model::kLandmarkCount);
     w.putArray(c.offsets_frontal_cm.data(), static_cast<std::size_t>(c.offsets_frontal_cm.size()));
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(c.expression_prior.size()));
+    for (const auto& [name, factor] : c.expression_prior) {
+        w.putString(name);
+        w.put<double>(factor);
+    }
     core::writeModelFile(path, kConventionMagic, kConventionVersion, w.bytes());
 }
 
@@ -27,14 +36,26 @@ LandmarkConvention readLandmarkConvention(const std::string& path) {
     if (r.get<std::uint32_t>() != model::kLandmarkCount) r.fail("landmark count");
     LandmarkConvention c;
     r.getArray(c.offsets_frontal_cm.data(), static_cast<std::size_t>(c.offsets_frontal_cm.size()));
+    const auto priors = r.get<std::uint32_t>();
+    if (priors > 1000) r.fail("expression prior count");
+    for (std::uint32_t k = 0; k < priors; ++k) {
+        std::string name = r.getString();
+        c.expression_prior[name] = r.get<double>();
+    }
     r.expectEnd();
     validate(c, what);
     return c;
 }
 
-void applyConvention(FitBasis& basis, const LandmarkConvention& c) {
+void applyConvention(FitBasis& basis, const LandmarkConvention& c, const model::FaceModelData& data) {
     for (int i = 0; i < model::kLandmarkCount; ++i)
         basis.neutral.col(basis.landmark_slots[static_cast<std::size_t>(i)]) += c.offsets_frontal_cm.col(i);
+    const auto names = basis.expressionNames(data);
+    basis.expression_prior = Eigen::VectorXd::Ones(basis.expressionCount());
+    for (std::size_t k = 0; k < names.size(); ++k) {
+        const auto it = c.expression_prior.find(names[k]);
+        if (it != c.expression_prior.end()) basis.expression_prior[static_cast<Eigen::Index>(k)] = it->second;
+    }
 }
 
 }  // namespace facetrack::fit

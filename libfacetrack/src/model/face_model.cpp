@@ -17,7 +17,7 @@ FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::stri
     for (const auto& e : data_->expressions) expression_names_.push_back(e.name);
     arkit_ = std::make_shared<const model::ArkitMapping>(model::makeArkitMapping(expression_names_));
     fit::FitBasis basis = fit::buildFitBasis(*data_);
-    if (!convention_.empty()) fit::applyConvention(basis, fit::readLandmarkConvention(convention_));
+    if (!convention_.empty()) fit::applyConvention(basis, fit::readLandmarkConvention(convention_), *data_);
     fit_basis_ = std::make_shared<const fit::FitBasis>(std::move(basis));
 }
 

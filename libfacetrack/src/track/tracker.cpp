@@ -42,6 +42,9 @@ void validate(const Models& models, const TrackerConfig& config) {
         throw Error("TrackerConfig::verify_interval and calibration_frames must not be negative");
     }
     if (!(config.max_fit_residual > 0.f)) throw Error("TrackerConfig::max_fit_residual must be positive");
+    if (!(config.expression_prior > 0.f && config.expression_prior <= 100.f)) {
+        throw Error("TrackerConfig::expression_prior must be in (0, 100]");
+    }
     const FilterConfig& f = config.filter;
     if (!(f.min_cutoff_hz > 0.0) || !(f.beta >= 0.0) || !(f.derivative_cutoff_hz > 0.0)) {
         throw Error("TrackerConfig::filter: cutoffs must be positive and beta not negative");
@@ -54,7 +57,7 @@ void validate(const Models& models, const TrackerConfig& config) {
 pipeline::StageList stageList(const Models& models, const TrackerConfig& config, const FaceDetector& detector) {
     pipeline::StageList stages;
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind()));
-    stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames}, models.landmarks != nullptr));
+    stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}, models.landmarks != nullptr));
     stages.push_back(pipeline::notAvailable("cnn", "the CNN refinement cascade is not built yet"));
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
     // The gaze stage's eye shapes have their own temporal estimate: the filter leaves them as they are.
