@@ -43,7 +43,8 @@ and shows the image with landmarks, mesh and gaze next to the avatar.
   --screenshot PNG      save the last frame's window content
   --msaa N              antialiasing samples (default 4 on a GPU, 0 on a software renderer)
 tracking options: --detector, --yunet, --min-score, --max-faces, --fov, --focal,
-  --calibration-frames, --filter-cutoff, --filter-beta, --no-filter (as in 'facetrack track')
+  --calibration-frames, --expression-prior, --filter-cutoff, --filter-beta, --no-filter
+  (as in 'facetrack track')
 
 keys: space pause, r reset identity calibration, m mirror, q or Esc quit
 )";

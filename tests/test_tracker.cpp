@@ -97,6 +97,11 @@ TEST(Tracker, BadSetupAndBadFramesGiveErrors) {
     TrackerConfig config;
     config.max_faces = 0;
     EXPECT_THROW(Tracker(faceOnly(), config), Error);
+    for (const float prior : {0.f, -1.f, 101.f, std::nanf("")}) {
+        TrackerConfig c;
+        c.expression_prior = prior;
+        EXPECT_THROW(Tracker(faceOnly(), c), Error) << prior;
+    }
     Tracker tracker(faceOnly());
     EXPECT_THROW(tracker.process(ImageView{}, 0.0), Error);
     const std::uint8_t pixel[3] = {0, 0, 0};

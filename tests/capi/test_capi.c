@@ -38,6 +38,11 @@ static void checkErrorsAndNulls(const ft_models* models) {
     config.max_faces = 0;
     CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_ERROR && tracker == NULL);
     CHECK(strstr(error, "max_faces") != NULL);
+    ft_tracker_config_init(&config);
+    CHECK(config.expression_prior == 1.0f);
+    config.expression_prior = 0.0f;
+    CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_ERROR && tracker == NULL);
+    CHECK(strstr(error, "expression_prior") != NULL);
     CHECK(ft_tracker_create(models, NULL, &tracker, NULL, 0) == FT_OK && tracker != NULL);
     ft_frame_result frame;
     frame.struct_size = sizeof frame;
