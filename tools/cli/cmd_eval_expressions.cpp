@@ -6,6 +6,7 @@
 #include "plot.hpp"
 
 #include "app/image_view.hpp"
+#include "dense/label_table.hpp"
 #include "core/environment.hpp"
 #include "facetrack/facetrack.hpp"
 
@@ -118,32 +119,15 @@ Track trackClip(const std::string& path, const TrackerConfig& config, bool mirro
 
 /// label_dense's clips.csv as ARKit weights, keyed "CLIP#FRAME".
 std::map<std::string, std::array<float, kArkitBlendshapeCount>> readDenseLabels(const std::string& path, const FaceModel& model) {
-    std::ifstream in(path);
-    if (!in) throw Error("cannot read dense labels '" + path + "'");
-    std::string line;
-    if (!std::getline(in, line)) throw Error(path + ": empty");
-    std::vector<std::string> header;
-    {
-        std::stringstream s(line);
-        for (std::string cell; std::getline(s, cell, ',');) header.push_back(cell);
-    }
+    const dense::LabelTable table = dense::readLabelTable(path);
     const auto& native = model.expressionNames();
-    std::vector<int> column(header.size(), -1);  // native index of each column
-    for (std::size_t c = 0; c < header.size(); ++c) {
-        const auto it = std::find(native.begin(), native.end(), header[c]);
-        if (it != native.end()) column[c] = static_cast<int>(it - native.begin());
-    }
+    std::vector<int> column(native.size());
+    for (std::size_t k = 0; k < native.size(); ++k) column[k] = table.column(native[k]);
     std::map<std::string, std::array<float, kArkitBlendshapeCount>> out;
-    while (std::getline(in, line)) {
-        std::stringstream s(line);
-        std::string key;
-        std::getline(s, key, ',');
-        std::vector<float> weights(native.size(), 0.f);
-        std::string cell;
-        for (std::size_t c = 1; std::getline(s, cell, ','); ++c) {
-            if (c < column.size() && column[c] >= 0) weights[static_cast<std::size_t>(column[c])] = std::stof(cell);
-        }
-        out[key] = model.toArkit(weights);
+    std::vector<float> weights(native.size());
+    for (const auto& row : table.rows) {
+        for (std::size_t k = 0; k < native.size(); ++k) weights[k] = column[k] < 0 ? 0.f : static_cast<float>(row.values[static_cast<std::size_t>(column[k])]);
+        out[row.key] = model.toArkit(weights);
     }
     return out;
 }

@@ -18,6 +18,7 @@
 
 #include "app/args.hpp"
 #include "common/faces300w.hpp"
+#include "dense/label_table.hpp"
 
 #include "core/pts.hpp"
 #include "fit/camera.hpp"
@@ -32,9 +33,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 using namespace facetrack;
 
@@ -88,21 +87,14 @@ double fitAll(const std::shared_ptr<const fit::FitBasis>& basis, const fit::FitS
     return residual;
 }
 
-/// label_dense's CSV rows of one split, as column name -> value, keyed by the row's key.
+/// label_dense's rows of one split, as column name -> value, keyed by the row's key.
 std::map<std::string, std::map<std::string, double>> readDenseLabelsOfSplit(const std::string& path, const std::string& split) {
-    std::ifstream in(path);
-    if (!in) throw Error("cannot read dense labels '" + path + "' (build/tools/label_dense makes them)");
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::string> header;
-    for (std::stringstream h(line); std::getline(h, line, ',');) header.push_back(line);
+    const dense::LabelTable table = dense::readLabelTable(path);
     std::map<std::string, std::map<std::string, double>> rows;
-    while (std::getline(in, line)) {
-        std::vector<std::string> cells;
-        for (std::stringstream c(line); std::getline(c, line, ',');) cells.push_back(line);
-        if (cells.size() != header.size() || cells[1] != split) continue;
-        auto& row = rows[cells[0]];
-        for (std::size_t k = 2; k < cells.size(); ++k) row[header[k]] = std::stod(cells[k]);
+    for (const auto& r : table.rows) {
+        if (r.split != split) continue;
+        auto& row = rows[r.key];
+        for (std::size_t k = 0; k < table.columns.size(); ++k) row[table.columns[k]] = r.values[k];
     }
     return rows;
 }
