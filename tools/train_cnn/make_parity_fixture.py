@@ -1,0 +1,33 @@
+#!/usr/bin/python3
+"""The cv::dnn parity test's fixture (tests/test_cnn_onnx.cpp): a narrow Stage net (train_stage.py's
+layers, random weights, seed 3, BatchNorm statistics set so folding matters), exported the same way,
+with three standardised inputs and torch's outputs as little-endian float32.
+
+  /usr/bin/python3 tools/train_cnn/make_parity_fixture.py tests/data
+"""
+import os, sys
+
+import numpy as np
+import torch
+
+sys.path.insert(0, os.path.dirname(__file__))
+from train_stage import Stage, export  # noqa: E402
+
+out = sys.argv[1] if len(sys.argv) > 1 else "tests/data"
+torch.manual_seed(3)
+net = Stage(7, widths=(4, 8, 8, 8), hidden=16)
+for m in net.modules():
+    if isinstance(m, torch.nn.BatchNorm2d):
+        m.running_mean.uniform_(-0.5, 0.5)
+        m.running_var.uniform_(0.5, 2.0)
+        m.weight.data.uniform_(0.5, 1.5)
+        m.bias.data.uniform_(-0.2, 0.2)
+net.eval()
+os.makedirs(out, exist_ok=True)
+export(net, os.path.join(out, "cnn_parity.onnx"))
+x = torch.randn(3, 1, 64, 64)
+with torch.no_grad():
+    y = net(x)
+x.numpy().astype("<f4").tofile(os.path.join(out, "cnn_parity_input.f32"))
+y.numpy().astype("<f4").tofile(os.path.join(out, "cnn_parity_output.f32"))
+print(f"wrote {out}/cnn_parity.onnx, inputs 3x1x64x64, outputs {tuple(y.shape)}")
