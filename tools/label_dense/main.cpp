@@ -1,8 +1,9 @@
 // label_dense: dense teacher labels (issue 16, step 3). Fits the face model's
-// pose, identity and every expression the dense points observe to MediaPipe's
+// pose, identity and every expression but the eyeballs' looks to MediaPipe's
 // 478-point mesh of every 300-W crop and clip frame (../shared/data/teacher,
 // another model's predictions, not ground truth), through a correspondence
-// between MediaPipe's vertices and the model's surface. Writes
+// between MediaPipe's vertices and the model's surface and a learned teacher
+// convention (docs/expressions.md). Writes
 //   OUT/correspondence.csv   MediaPipe vertex -> model triangle, barycentric weights, distance
 //   OUT/faces300w.csv        one row per crop: split, residual, pose, identity, expression weights
 //   OUT/clips.csv            one row per clip frame (identity shared per clip)
@@ -244,9 +245,12 @@ int run(int argc, char** argv) {
     const auto splits = splitsOf300W(root);
     const auto faces = dense::readTeacherMeshes(teacherDir + "/faces300w_iris.jsonl", teacherDir + "/faces300w_mesh.npy");
     {
-        const auto tracked = FaceModel::loadDefault();
-        fit::FaceFitter fitter(tracked->fitBasis(), fit::FitSettings());
-        const auto fitted = tracked->fitBasis()->expressionNames(data);
+        // The landmark convention's offsets with a flat prior: its prior is learned from these labels.
+        fit::FitBasis offsetsOnly = *FaceModel::loadDefault()->fitBasis();
+        offsetsOnly.expression_prior.setOnes();
+        const auto tracked = std::make_shared<const fit::FitBasis>(std::move(offsetsOnly));
+        fit::FaceFitter fitter(tracked, fit::FitSettings());
+        const auto fitted = tracked->expressionNames(data);
         std::vector<int> mouth;
         for (const char* name : {"jawOpen", "mouthSmile_L", "mouthSmile_R"})
             mouth.push_back(static_cast<int>(std::find(fitted.begin(), fitted.end(), name) - fitted.begin()));
