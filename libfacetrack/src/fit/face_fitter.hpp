@@ -4,10 +4,11 @@
 // fitting without the depth term):
 //
 //   min  sum_i rho(|pi(R X_i(a, b) + t) - u_i|^2 / s^2)
-//        + w_l2 |b|^2 + w_t |b - b_prev|^2 + |W_p (p - p_prev)|^2,   b in [0, 1]
+//        + w_l2 sum_j f_j b_j^2 + w_t |b - b_prev|^2 + |W_p (p - p_prev)|^2,   b in [0, 1]
 //
 // over the pose p = (omega, t) and expression b, with u_i the landmarks, s the
-// eye-corner distance in pixels, rho a Huber loss. The 17 jaw landmarks are not
+// eye-corner distance in pixels, rho a Huber loss, f_j the learned prior's
+// factors (FitBasis::expression_prior; 1 without one). The 17 jaw landmarks are not
 // tied to fixed vertices: each is matched to the silhouette vertex among its
 // contour candidates (nearestContour), re-chosen as the pose changes.
 
@@ -29,7 +30,7 @@ using ContourSlots = std::array<int, model::kContourLandmarkCount>;
 
 struct FitSettings {
     double huber = 0.05;                ///< robust loss scale, in eye-corner distances
-    double expression_l2 = 1e-3;        ///< w_l2
+    double expression_l2 = 1e-3;        ///< w_l2 (TrackerConfig::expression_prior scales it)
     double expression_temporal = 5e-3;  ///< w_t
     double rotation_temporal = 1e-3;    ///< per rad^2
     double translation_temporal = 1e-5; ///< per cm^2
