@@ -127,6 +127,148 @@ struct LandmarkCheck {
     }
 };
 
+/// What every labelling step shares.
+struct Setup {
+    const model::FaceModelData& data;
+    dense::Correspondence correspondence;
+    dense::CanonicalMesh canonical;
+    std::vector<int> vertices;  ///< the MediaPipe vertex of each slot
+    dense::DenseModel model;
+    dense::DenseFitSettings settings;
+    std::vector<std::string> names;  ///< the fitted expressions
+};
+
+/// The teacher's convention (dense::learnTeacherConvention), learned on the 300-W training crops
+/// whose annotated landmarks fit a closed, unsmiling mouth: 300-W's average face smiles, and a
+/// convention learned on it would read a relaxed mouth as its opposite. Added to s.model.
+void learnConvention(Setup& s, const dense::TeacherMeshes& faces, const std::map<std::string, std::string>& splits,
+                     const std::string& root, int rounds, nlohmann::json& summary) {
+    const auto& data = s.data;
+    const auto& vertices = s.vertices;
+    // The landmark convention's offsets with a flat prior: its prior is learned from these labels.
+    fit::FitBasis offsetsOnly = *FaceModel::loadDefault()->fitBasis();
+    offsetsOnly.expression_prior.setOnes();
+    const auto tracked = std::make_shared<const fit::FitBasis>(std::move(offsetsOnly));
+    fit::FaceFitter fitter(tracked, fit::FitSettings());
+    const auto fitted = tracked->expressionNames(data);
+    std::vector<int> mouth;
+    for (const char* name : {"jawOpen", "mouthSmile_L", "mouthSmile_R"})
+        mouth.push_back(static_cast<int>(std::find(fitted.begin(), fitted.end(), name) - fitted.begin()));
+    std::vector<dense::DenseFrame> train;
+    int candidates = 0;
+    for (int r = 0; r < faces.rows(); ++r) {
+        const std::string& key = faces.keys[static_cast<std::size_t>(r)];
+        const auto split = splits.find(key);
+        if (!faces.found[static_cast<std::size_t>(r)] || split == splits.end() || split->second != "train") continue;
+        ++candidates;
+        const core::Shape2 pts = core::readPts((std::filesystem::path(root) / key).replace_extension(".pts").string());
+        fit::FaceParams p;
+        fitter.fit(dense::teacherFrame(faces, r, vertices).camera, pts.cast<double>(), p, false);
+        if (std::all_of(mouth.begin(), mouth.end(), [&](int k) { return k < p.expression.size() && p.expression[k] < 0.1; }))
+            train.push_back(dense::teacherFrame(faces, r, vertices));
+    }
+    std::printf("teacher convention: %zu of %d training crops fit a closed, unsmiling mouth\n", train.size(), candidates);
+    const std::vector<int> mirrorOf = dense::mirrorVertices(s.canonical.vertices);
+    std::vector<int> mirrorSlot(vertices.size());
+    for (std::size_t s = 0; s < vertices.size(); ++s) {
+        const auto it = std::find(vertices.begin(), vertices.end(), mirrorOf[static_cast<std::size_t>(vertices[s])]);
+        mirrorSlot[s] = it == vertices.end() ? static_cast<int>(s) : static_cast<int>(it - vertices.begin());
+    }
+    const Eigen::Matrix3Xd offsets = dense::learnTeacherConvention(s.model, s.settings, train, mirrorSlot, rounds);
+    std::vector<double> mm;
+    for (Eigen::Index i = 0; i < offsets.cols(); ++i) mm.push_back(10.0 * offsets.col(i).norm());
+    std::printf("teacher convention (%zu training crops, %d rounds): offsets median %.2f mm, p90 %.2f mm, max %.2f mm\n", train.size(),
+                rounds, quantile(mm, 0.5), quantile(mm, 0.9), quantile(mm, 1.0));
+    summary["teacher_convention"] = {{"crops", train.size()}, {"median_mm", quantile(mm, 0.5)}, {"p90_mm", quantile(mm, 0.9)}};
+    std::vector<dense::DenseFrame> one{dense::canonicalFrame(s.correspondence, s.canonical.vertices, vertices, 0.0)};
+    dense::fitIdentity(s.model, s.settings, one);
+    Eigen::Index worst = 0;
+    const double largest = one[0].params.expression.maxCoeff(&worst);
+    std::printf("canonical neutral with the teacher convention, fitted identity: largest expression %s %.3f, mean %.4f\n",
+                s.names[static_cast<std::size_t>(worst)].c_str(), largest, one[0].params.expression.mean());
+    summary["canonical_check_with_convention"] = {{"largest", largest}, {"largest_name", s.names[static_cast<std::size_t>(worst)]}};
+}
+
+/// Labels every 300-W crop: one view each, so identity is fitted per image. Writes faces300w.csv.
+void label300W(const Setup& s, const dense::TeacherMeshes& meshes, const std::map<std::string, std::string>& splits,
+               const std::string& root, const std::string& outDir, int limit, nlohmann::json& summary) {
+    const auto conventionData = fit::readLandmarkConvention(FaceModel::defaultConventionPath());
+    const LandmarkCheck landmarkCheck(s.data, conventionData, s.model.basis.expressions);
+    const auto& vertices = s.vertices;
+    std::ofstream out(outDir + "/faces300w.csv");
+    writeHeader(out, s.names, s.model.basis.identityCount());
+    std::map<std::string, std::vector<double>> residuals;
+    std::map<std::string, std::array<std::vector<double>, 5>> nmes;
+    const int total = std::min(meshes.rows(), limit);
+    for (int r = 0; r < total; ++r) {
+        progress("300-W", r + 1, total);
+        if (!meshes.found[static_cast<std::size_t>(r)]) continue;
+        const std::string& key = meshes.keys[static_cast<std::size_t>(r)];
+        const auto split = splits.find(key);
+        const std::string splitName = split == splits.end() ? "other" : split->second;
+        std::vector<dense::DenseFrame> one{dense::teacherFrame(meshes, r, vertices)};
+        const Eigen::VectorXd identity = dense::fitIdentity(s.model, s.settings, one);
+        writeRow(out, key, splitName, one[0], identity);
+        residuals[splitName].push_back(one[0].residual);
+        const std::string pts = (std::filesystem::path(root) / key).replace_extension(".pts").string();
+        if (std::filesystem::exists(pts)) {
+            const auto e = landmarkCheck.nme(one[0], identity, core::readPts(pts));
+            for (std::size_t g = 0; g < e.size(); ++g) nmes[splitName][g].push_back(e[g]);
+        }
+    }
+    for (const auto& [split, v] : residuals) {
+        const auto& n = nmes[split];
+        std::printf("300-W %-10s %4zu crops: residual to the teacher median %.4f, p95 %.4f eye-corner distances\n"
+                    "  landmarks vs the annotation, median NME (inter-ocular): brows %.4f, nose %.4f, eyes %.4f, mouth %.4f, "
+                    "17-67 %.4f\n",
+                    split.c_str(), v.size(), quantile(v, 0.5), quantile(v, 0.95), quantile(n[0], 0.5), quantile(n[1], 0.5),
+                    quantile(n[2], 0.5), quantile(n[3], 0.5), quantile(n[4], 0.5));
+        summary["faces300w"][split] = {{"crops", v.size()}, {"residual_median", quantile(v, 0.5)}, {"residual_p95", quantile(v, 0.95)},
+                                       {"landmark_nme_median", quantile(n[4], 0.5)}};
+    }
+}
+
+/// Labels every clip frame: identity shared per clip (fitted on 40 frames spread over it), then
+/// every frame, warm from the previous one. Writes clips.csv.
+void labelClips(const Setup& s, const std::string& teacherDir, const std::string& outDir, int limit, nlohmann::json& summary) {
+    const auto& vertices = s.vertices;
+    const auto meshes = dense::readTeacherMeshes(teacherDir + "/clips_iris.jsonl", teacherDir + "/clips_mesh.npy");
+    std::map<std::string, std::vector<int>> rowsOf;
+    for (int r = 0; r < meshes.rows(); ++r) {
+        if (!meshes.found[static_cast<std::size_t>(r)]) continue;
+        const std::string& key = meshes.keys[static_cast<std::size_t>(r)];
+        rowsOf[key.substr(0, key.rfind('#'))].push_back(r);
+    }
+    std::ofstream out(outDir + "/clips.csv");
+    writeHeader(out, s.names, s.model.basis.identityCount());
+    auto frameOf = [&](int r) { return dense::teacherFrame(meshes, r, vertices); };
+    int done = 0, total = 0;
+    for (const auto& [clip, rows] : rowsOf) total += std::min(static_cast<int>(rows.size()), limit);
+    for (const auto& [clip, rows] : rowsOf) {
+        const bool heldOut = std::find(std::begin(kHeldOutClips), std::end(kHeldOutClips), clip) != std::end(kHeldOutClips);
+        const int count = std::min(static_cast<int>(rows.size()), limit);
+        std::vector<dense::DenseFrame> sample;
+        for (int k = 0; k < 40; ++k) sample.push_back(frameOf(rows[static_cast<std::size_t>(k * (count - 1) / 39)]));
+        const Eigen::VectorXd identity = dense::fitIdentity(s.model, s.settings, sample);
+        std::vector<double> residuals;
+        dense::DenseFrame previous;
+        for (int k = 0; k < count; ++k) {
+            progress("clips", ++done, total);
+            dense::DenseFrame f = frameOf(rows[static_cast<std::size_t>(k)]);
+            f.params = previous.params;
+            dense::fitFrame(s.model, s.settings, identity, f, k > 0 && previous.residual < 0.1);
+            writeRow(out, meshes.keys[static_cast<std::size_t>(rows[static_cast<std::size_t>(k)])], heldOut ? "heldout" : "train", f,
+                     identity);
+            residuals.push_back(f.residual);
+            previous = f;
+        }
+        std::printf("clip %-42s %4d frames: residual median %.4f, p95 %.4f; |identity| %.2f\n", clip.c_str(), count,
+                    quantile(residuals, 0.5), quantile(residuals, 0.95), identity.norm());
+        summary["clips"][clip] = {{"frames", count}, {"residual_median", quantile(residuals, 0.5)},
+                                  {"residual_p95", quantile(residuals, 0.95)}, {"split", heldOut ? "heldout" : "train"}};
+    }
+}
+
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            {"--out", "--only", "--limit", "--teacher", "--canonical", "--faces300w", "--identity-prior", "--observable-l2", "--unobservable-l2", "--convention-rounds"}, {"--help"});
@@ -238,134 +380,13 @@ int run(int argc, char** argv) {
         }
     }
 
-    // 4. The teacher's convention, learned on the 300-W training crops whose annotated landmarks
-    // fit a closed, unsmiling mouth (the landmark fit, learned convention included): 300-W's
-    // average face smiles, and a convention learned on it would read a relaxed mouth as its opposite.
+    Setup s{data, corr, canonical, vertices, dm, settings, names};
     const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
     const auto splits = splitsOf300W(root);
     const auto faces = dense::readTeacherMeshes(teacherDir + "/faces300w_iris.jsonl", teacherDir + "/faces300w_mesh.npy");
-    {
-        // The landmark convention's offsets with a flat prior: its prior is learned from these labels.
-        fit::FitBasis offsetsOnly = *FaceModel::loadDefault()->fitBasis();
-        offsetsOnly.expression_prior.setOnes();
-        const auto tracked = std::make_shared<const fit::FitBasis>(std::move(offsetsOnly));
-        fit::FaceFitter fitter(tracked, fit::FitSettings());
-        const auto fitted = tracked->expressionNames(data);
-        std::vector<int> mouth;
-        for (const char* name : {"jawOpen", "mouthSmile_L", "mouthSmile_R"})
-            mouth.push_back(static_cast<int>(std::find(fitted.begin(), fitted.end(), name) - fitted.begin()));
-        std::vector<dense::DenseFrame> train;
-        int candidates = 0;
-        for (int r = 0; r < faces.rows(); ++r) {
-            const std::string& key = faces.keys[static_cast<std::size_t>(r)];
-            const auto split = splits.find(key);
-            if (!faces.found[static_cast<std::size_t>(r)] || split == splits.end() || split->second != "train") continue;
-            ++candidates;
-            const core::Shape2 pts = core::readPts((std::filesystem::path(root) / key).replace_extension(".pts").string());
-            fit::FaceParams p;
-            fitter.fit(dense::teacherFrame(faces, r, vertices).camera, pts.cast<double>(), p, false);
-            if (std::all_of(mouth.begin(), mouth.end(), [&](int k) { return k < p.expression.size() && p.expression[k] < 0.1; }))
-                train.push_back(dense::teacherFrame(faces, r, vertices));
-        }
-        std::printf("teacher convention: %zu of %d training crops fit a closed, unsmiling mouth\n", train.size(), candidates);
-        const std::vector<int> mirrorOf = dense::mirrorVertices(canonical.vertices);
-        std::vector<int> mirrorSlot(vertices.size());
-        for (std::size_t s = 0; s < vertices.size(); ++s) {
-            const auto it = std::find(vertices.begin(), vertices.end(), mirrorOf[static_cast<std::size_t>(vertices[s])]);
-            mirrorSlot[s] = it == vertices.end() ? static_cast<int>(s) : static_cast<int>(it - vertices.begin());
-        }
-        const int rounds = static_cast<int>(args.number("--convention-rounds", 3));
-        const Eigen::Matrix3Xd offsets = dense::learnTeacherConvention(dm, settings, train, mirrorSlot, rounds);
-        std::vector<double> mm;
-        for (Eigen::Index i = 0; i < offsets.cols(); ++i) mm.push_back(10.0 * offsets.col(i).norm());
-        std::printf("teacher convention (%zu training crops, %d rounds): offsets median %.2f mm, p90 %.2f mm, max %.2f mm\n", train.size(),
-                    rounds, quantile(mm, 0.5), quantile(mm, 0.9), quantile(mm, 1.0));
-        summary["teacher_convention"] = {{"crops", train.size()}, {"median_mm", quantile(mm, 0.5)}, {"p90_mm", quantile(mm, 0.9)}};
-        std::vector<dense::DenseFrame> one{dense::canonicalFrame(corr, canonical.vertices, vertices, 0.0)};
-        dense::fitIdentity(dm, settings, one);
-        Eigen::Index worst = 0;
-        const double largest = one[0].params.expression.maxCoeff(&worst);
-        std::printf("canonical neutral with the teacher convention, fitted identity: largest expression %s %.3f, mean %.4f\n",
-                    names[static_cast<std::size_t>(worst)].c_str(), largest, one[0].params.expression.mean());
-        summary["canonical_check_with_convention"] = {{"largest", largest}, {"largest_name", names[static_cast<std::size_t>(worst)]}};
-    }
-
-    // 5. 300-W crops: one view each, so identity is fitted per image.
-    const auto conventionData = fit::readLandmarkConvention(FaceModel::defaultConventionPath());
-    const LandmarkCheck landmarkCheck(data, conventionData, candidates);
-    if (only.empty() || only == "300w") {
-        const auto& meshes = faces;
-        std::ofstream out(outDir + "/faces300w.csv");
-        writeHeader(out, names, dm.basis.identityCount());
-        std::map<std::string, std::vector<double>> residuals;
-        std::map<std::string, std::array<std::vector<double>, 5>> nmes;
-        const int total = std::min(meshes.rows(), limit);
-        for (int r = 0; r < total; ++r) {
-            progress("300-W", r + 1, total);
-            if (!meshes.found[static_cast<std::size_t>(r)]) continue;
-            const std::string& key = meshes.keys[static_cast<std::size_t>(r)];
-            const auto split = splits.find(key);
-            const std::string splitName = split == splits.end() ? "other" : split->second;
-            std::vector<dense::DenseFrame> one{dense::teacherFrame(meshes, r, vertices)};
-            const Eigen::VectorXd identity = dense::fitIdentity(dm, settings, one);
-            writeRow(out, key, splitName, one[0], identity);
-            residuals[splitName].push_back(one[0].residual);
-            const std::string pts = (std::filesystem::path(root) / key).replace_extension(".pts").string();
-            if (std::filesystem::exists(pts)) {
-                const auto e = landmarkCheck.nme(one[0], identity, core::readPts(pts));
-                for (std::size_t g = 0; g < e.size(); ++g) nmes[splitName][g].push_back(e[g]);
-            }
-        }
-        for (const auto& [split, v] : residuals) {
-            const auto& n = nmes[split];
-            std::printf("300-W %-10s %4zu crops: residual to the teacher median %.4f, p95 %.4f eye-corner distances\n"
-                        "  landmarks vs the annotation, median NME (inter-ocular): brows %.4f, nose %.4f, eyes %.4f, mouth %.4f, "
-                        "17-67 %.4f\n",
-                        split.c_str(), v.size(), quantile(v, 0.5), quantile(v, 0.95), quantile(n[0], 0.5), quantile(n[1], 0.5),
-                        quantile(n[2], 0.5), quantile(n[3], 0.5), quantile(n[4], 0.5));
-            summary["faces300w"][split] = {{"crops", v.size()}, {"residual_median", quantile(v, 0.5)}, {"residual_p95", quantile(v, 0.95)},
-                                           {"landmark_nme_median", quantile(n[4], 0.5)}};
-        }
-    }
-
-    // 6. Clips: identity shared per clip (fitted on 40 frames spread over it), then every frame, warm.
-    if (only.empty() || only == "clips") {
-        const auto meshes = dense::readTeacherMeshes(teacherDir + "/clips_iris.jsonl", teacherDir + "/clips_mesh.npy");
-        std::map<std::string, std::vector<int>> rowsOf;
-        for (int r = 0; r < meshes.rows(); ++r) {
-            if (!meshes.found[static_cast<std::size_t>(r)]) continue;
-            const std::string& key = meshes.keys[static_cast<std::size_t>(r)];
-            rowsOf[key.substr(0, key.rfind('#'))].push_back(r);
-        }
-        std::ofstream out(outDir + "/clips.csv");
-        writeHeader(out, names, dm.basis.identityCount());
-        auto frameOf = [&](int r) { return dense::teacherFrame(meshes, r, vertices); };
-        int done = 0, total = 0;
-        for (const auto& [clip, rows] : rowsOf) total += std::min(static_cast<int>(rows.size()), limit);
-        for (const auto& [clip, rows] : rowsOf) {
-            const bool heldOut = std::find(std::begin(kHeldOutClips), std::end(kHeldOutClips), clip) != std::end(kHeldOutClips);
-            const int count = std::min(static_cast<int>(rows.size()), limit);
-            std::vector<dense::DenseFrame> sample;
-            for (int k = 0; k < 40; ++k) sample.push_back(frameOf(rows[static_cast<std::size_t>(k * (count - 1) / 39)]));
-            const Eigen::VectorXd identity = dense::fitIdentity(dm, settings, sample);
-            std::vector<double> residuals;
-            dense::DenseFrame previous;
-            for (int k = 0; k < count; ++k) {
-                progress("clips", ++done, total);
-                dense::DenseFrame f = frameOf(rows[static_cast<std::size_t>(k)]);
-                f.params = previous.params;
-                dense::fitFrame(dm, settings, identity, f, k > 0 && previous.residual < 0.1);
-                writeRow(out, meshes.keys[static_cast<std::size_t>(rows[static_cast<std::size_t>(k)])], heldOut ? "heldout" : "train", f,
-                         identity);
-                residuals.push_back(f.residual);
-                previous = f;
-            }
-            std::printf("clip %-42s %4d frames: residual median %.4f, p95 %.4f; |identity| %.2f\n", clip.c_str(), count,
-                        quantile(residuals, 0.5), quantile(residuals, 0.95), identity.norm());
-            summary["clips"][clip] = {{"frames", count}, {"residual_median", quantile(residuals, 0.5)},
-                                      {"residual_p95", quantile(residuals, 0.95)}, {"split", heldOut ? "heldout" : "train"}};
-        }
-    }
+    learnConvention(s, faces, splits, root, static_cast<int>(args.number("--convention-rounds", 3)), summary);
+    if (only.empty() || only == "300w") label300W(s, faces, splits, root, outDir, limit, summary);
+    if (only.empty() || only == "clips") labelClips(s, teacherDir, outDir, limit, summary);
     const std::string summaryPath = outDir + "/summary" + (only.empty() ? "" : "_" + only) + ".json";
     std::ofstream(summaryPath) << summary.dump(2) << '\n';
     std::printf("wrote %s/{correspondence,faces300w,clips}.csv and %s (%.0f s)\n", outDir.c_str(), summaryPath.c_str(), seconds());
