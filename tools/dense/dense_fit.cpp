@@ -1,12 +1,11 @@
 #include "dense/dense_fit.hpp"
 
-#include "fit/costs.hpp"
 #include "facetrack/error.hpp"
-
-#include <algorithm>
+#include "fit/costs.hpp"
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
