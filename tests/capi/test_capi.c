@@ -121,6 +121,14 @@ int main(void) {
     CHECK(withFace == frames);
     CHECK(ft_tracker_calibrate_neutral(tracker) == FT_OK && ft_tracker_reset_neutral(tracker) == FT_OK);
     CHECK(ft_tracker_calibrate_neutral(NULL) == FT_INVALID_ARGUMENT);
+    {
+        int32_t estimated[FT_ARKIT_COUNT];
+        CHECK(ft_tracker_estimated_shapes(tracker, estimated) == FT_OK);
+        CHECK(estimated[17] == 1);  /* jawOpen: the fit's */
+        CHECK(estimated[51] == 0);  /* tongueOut: nothing estimates it */
+        CHECK(ft_tracker_estimated_shapes(NULL, estimated) == FT_INVALID_ARGUMENT);
+        CHECK(ft_tracker_estimated_shapes(tracker, NULL) == FT_INVALID_ARGUMENT);
+    }
     CHECK(ft_tracker_reset(tracker) == FT_OK && ft_tracker_reset_identity(tracker) == FT_OK);
     ft_tracker_destroy(tracker);
     ft_models_destroy(models);

@@ -153,6 +153,10 @@ FT_API ft_status ft_tracker_reset_identity(ft_tracker* tracker);
  *  Tracker::calibrateNeutral) / turn that off. */
 FT_API ft_status ft_tracker_calibrate_neutral(ft_tracker* tracker);
 FT_API ft_status ft_tracker_reset_neutral(ft_tracker* tracker);
+/** Which ARKit shapes some stage estimates (the C++ Tracker::estimatedShapes):
+ *  estimated[i] = 1 for ft_arkit_name(i) when one does, 0 when it is always 0.
+ *  `estimated` holds FT_ARKIT_COUNT values. */
+FT_API ft_status ft_tracker_estimated_shapes(const ft_tracker* tracker, int32_t estimated[FT_ARKIT_COUNT]);
 /** The tracker's last error ("" after a success); owned by the tracker, valid
  *  until its next call. NULL tracker: a static string saying so. */
 FT_API const char* ft_tracker_last_error(const ft_tracker* tracker);

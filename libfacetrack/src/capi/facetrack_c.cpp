@@ -248,6 +248,15 @@ ft_status ft_tracker_reset_neutral(ft_tracker* tracker) {
     return guarded(tracker->error, [&] { tracker->tracker.resetNeutral(); });
 }
 
+ft_status ft_tracker_estimated_shapes(const ft_tracker* tracker, int32_t estimated[FT_ARKIT_COUNT]) {
+    if (!tracker || !estimated) return FT_INVALID_ARGUMENT;
+    std::string ignored;
+    return guarded(ignored, [&] {
+        std::fill(estimated, estimated + FT_ARKIT_COUNT, 0);
+        for (const auto& name : tracker->tracker.estimatedShapes()) estimated[facetrack::arkitIndex(name)] = 1;
+    });
+}
+
 const char* ft_tracker_last_error(const ft_tracker* tracker) {
     return tracker ? tracker->error.c_str() : "ft_tracker_last_error: no tracker";
 }
