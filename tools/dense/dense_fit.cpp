@@ -48,16 +48,6 @@ fit::FaceParams coldStart(const DenseModel& m, const Eigen::Matrix3Xd& base, con
     return p;
 }
 
-ceres::Solver::Options options(int iterations, ceres::LinearSolverType solver) {
-    ceres::Solver::Options o;
-    o.linear_solver_type = solver;
-    o.max_num_iterations = iterations;
-    o.num_threads = 1;
-    o.logging_type = ceres::SILENT;
-    o.function_tolerance = 1e-6;
-    o.parameter_tolerance = 1e-6;
-    return o;
-}
 
 /// The frame's residual blocks: points (identity as a parameter, from the plain neutral) and the expression prior.
 void addFrame(ceres::Problem& problem, const DenseModel& m, const DenseFitSettings& settings, DenseFrame& frame, double& scale,
@@ -202,10 +192,10 @@ void fitFrame(const DenseModel& m, const DenseFitSettings& settings, const Eigen
     ceres::Solver::Summary summary;
     if (!warm) {
         problem.SetParameterBlockConstant(frame.params.expression.data());
-        ceres::Solve(options(settings.iterations, ceres::DENSE_QR), &problem, &summary);
+        ceres::Solve(fit::solverOptions(settings.iterations, ceres::DENSE_QR, 1e-6), &problem, &summary);
         problem.SetParameterBlockVariable(frame.params.expression.data());
     }
-    ceres::Solve(options(settings.iterations, ceres::DENSE_QR), &problem, &summary);
+    ceres::Solve(fit::solverOptions(settings.iterations, ceres::DENSE_QR, 1e-6), &problem, &summary);
     frame.residual = frame.params.pose.allFinite() && frame.params.expression.allFinite() ? rmsResidual(m, a, frame)
                                                                                            : std::numeric_limits<double>::infinity();
 }
@@ -221,7 +211,7 @@ Eigen::VectorXd fitIdentity(const DenseModel& m, const DenseFitSettings& setting
         nullptr, identity.data());
     for (std::size_t f = 0; f < frames.size(); ++f) addFrame(problem, m, settings, frames[f], scales[f], identity.data());
     ceres::Solver::Summary summary;
-    ceres::Solve(options(settings.iterations, frames.size() > 1 ? ceres::DENSE_SCHUR : ceres::DENSE_QR), &problem, &summary);
+    ceres::Solve(fit::solverOptions(settings.iterations, frames.size() > 1 ? ceres::DENSE_SCHUR : ceres::DENSE_QR, 1e-6), &problem, &summary);
     if (!identity.allFinite()) identity.setZero();
     for (DenseFrame& f : frames) f.residual = rmsResidual(m, identity, f);
     return identity;

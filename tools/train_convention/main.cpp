@@ -103,14 +103,6 @@ std::map<std::string, std::map<std::string, double>> readDenseLabels(const std::
     return readDenseLabelsOfSplit(path, "train");
 }
 
-/// The mirror partner's name ("mouthSmile_L" <-> "mouthSmile_R", "mouthLeft" <-> "mouthRight"), or the name.
-std::string partnerOf(const std::string& name) {
-    for (const auto& [a, b] : {std::pair<std::string, std::string>{"_L", "_R"}, {"_R", "_L"}, {"Left", "Right"}, {"Right", "Left"}}) {
-        if (name.size() > a.size() && name.compare(name.size() - a.size(), a.size(), a) == 0) return name.substr(0, name.size() - a.size()) + b;
-    }
-    return name;
-}
-
 /// Mean squared difference between the fits of `faces` and their dense labels, over the non-eye fitted shapes.
 double labelError(const std::shared_ptr<const fit::FitBasis>& basis, const std::vector<std::string>& names, const std::vector<Face>& faces,
                   const std::map<std::string, std::map<std::string, double>>& labels) {
@@ -197,7 +189,8 @@ int main(int argc, char** argv) {
             double logMean = 0.0;
             int counted = 0;
             for (std::size_t k = 0; k < names.size(); ++k) {
-                const auto partner = std::find(names.begin(), names.end(), partnerOf(names[k]));
+                const std::string mirror = fit::mirrorName(names[k]);
+                const auto partner = std::find(names.begin(), names.end(), mirror.empty() ? names[k] : mirror);
                 symmetric[k] = std::max(1e-4, 0.5 * (moment[k] + moment[static_cast<std::size_t>(partner - names.begin())]));
                 if (names[k].rfind("eye", 0) == 0) continue;
                 logMean += std::log(symmetric[k]);

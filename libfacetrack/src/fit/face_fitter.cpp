@@ -11,20 +11,22 @@ namespace {
 
 constexpr int kJaw = model::kContourLandmarkCount;
 
-/// Tolerances: a relative cost change of 1e-5 is far below the landmarks'
-/// noise; tighter ones only add iterations.
-ceres::Solver::Options solverOptions(int iterations, ceres::LinearSolverType solver) {
+}  // namespace
+
+ceres::Solver::Options solverOptions(int iterations, ceres::LinearSolverType solver, double tolerance) {
     ceres::Solver::Options options;
     options.linear_solver_type = solver;
     options.max_num_iterations = iterations;
     options.num_threads = 1;
     options.logging_type = ceres::SILENT;
     options.minimizer_progress_to_stdout = false;
-    options.function_tolerance = 1e-5;
+    options.function_tolerance = tolerance;
     options.gradient_tolerance = 1e-8;
-    options.parameter_tolerance = 1e-5;
+    options.parameter_tolerance = tolerance;
     return options;
 }
+
+namespace {
 
 void boundExpressions(ceres::Problem& problem, double* expression, int count) {
     for (int k = 0; k < count; ++k) {

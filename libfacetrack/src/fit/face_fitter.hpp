@@ -46,6 +46,11 @@ struct FitReport {
     int iterations = 0;
 };
 
+/// Single-threaded, silent Ceres options; `tolerance` on the relative cost and
+/// parameter changes (the landmark fit: 1e-5, far below the landmarks' noise;
+/// tighter ones only add iterations).
+ceres::Solver::Options solverOptions(int iterations, ceres::LinearSolverType solver, double tolerance = 1e-5);
+
 /// Outer-eye-corner distance (points 36 and 45), the 300-W face size.
 double eyeCornerDistance(const Landmarks2d& points);
 

@@ -15,7 +15,9 @@ namespace {
 /// noise on a 90 px face moves the weight by more than ~0.2.
 constexpr double kMinDistinctMotion = 0.08;
 
-/// The mirror partner's name ("mouthSmile_L" <-> "mouthSmile_R",
+}  // namespace
+
+// The mirror partner's name ("mouthSmile_L" <-> "mouthSmile_R",
 /// "jawLeft" <-> "jawRight"), or "".
 std::string mirrorName(const std::string& name) {
     auto swapSuffix = [&](const std::string& a, const std::string& b) -> std::string {
@@ -29,8 +31,6 @@ std::string mirrorName(const std::string& name) {
     }
     return "";
 }
-
-}  // namespace
 
 Eigen::Matrix3d modelToFrontal() { return Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal(); }
 

@@ -20,6 +20,10 @@
 
 namespace facetrack::fit {
 
+/// A native expression's mirror partner ("mouthSmile_L" <-> "mouthSmile_R",
+/// "jawLeft" <-> "jawRight"), or "" for an unsided one.
+std::string mirrorName(const std::string& name);
+
 /// R_0 of the comment above.
 Eigen::Matrix3d modelToFrontal();
 
