@@ -161,7 +161,7 @@ TEST(AsyncTracker, AClipTrackedFrameByFrameDropsNothing) {
     EXPECT_FALSE(tracking.latest(latest));  // nothing newer
 }
 
-TEST(AsyncTracker, WaitForNewerHandsOverEveryResultOfAFrameByFrameClipThenTimesOut) {
+TEST(AsyncTracker, WaitForNewerHandsOverTheResultsOfAPacedClipInOrderThenTimesOut) {
     FACETRACK_REQUIRE_SHARED();
     const auto frames = clipFrames(40);
     AsyncTracker tracking(Models::loadDefault(), {}, std::make_unique<FakeCamera>(frames, std::chrono::milliseconds(20), 40));
@@ -174,8 +174,13 @@ TEST(AsyncTracker, WaitForNewerHandsOverEveryResultOfAFrameByFrameClipThenTimesO
         ++received;
     }
     EXPECT_TRUE(tracking.stats().finished);
-    EXPECT_EQ(last, 39);  // a frame every 20 ms, tracked in ~1 ms: none replaced before it was tracked
-    EXPECT_EQ(received, 40 - tracking.stats().frames_dropped);
+    EXPECT_EQ(last, 39);  // the last frame is always tracked and handed over
+    // A frame every 20 ms, tracked in ~1 ms: a waiting consumer gets nearly every result. Not
+    // every one: a loaded machine (CI runs tests in parallel) can keep this thread off the core
+    // for longer than 20 ms, and then the newer result replaces the one it missed, by design.
+    const long tracked = tracking.stats().frames_tracked;
+    EXPECT_LE(received, tracked);
+    EXPECT_GE(received, tracked * 9 / 10);
     const auto start = Clock::now();
     EXPECT_FALSE(tracking.waitForNewer(latest, 5.0));  // finished: returns at once, not after 5 s
     EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 0.5);
