@@ -1,13 +1,14 @@
 // The CNN cascade's input (src/cnn/face_warp): the face texture in canonical space.
 
 #include "cnn/face_warp.hpp"
+#include "cnn/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
+#include "profile/face_profiling.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgproc.hpp>
 
-#include <random>
 
 namespace facetrack {
 namespace {
@@ -21,6 +22,26 @@ struct WarpScene {
 const WarpScene& scene() {
     static const WarpScene s;
     return s;
+}
+
+cv::Mat smoothTexture(int width, int height, unsigned seed) {
+    cv::theRNG().state = seed;
+    cv::Mat noise(height, width, CV_32F);
+    cv::randn(noise, 0.0, 1.0);
+    cv::Mat smooth;
+    cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 6.0);
+    cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
+    cv::Mat frame;
+    smooth.convertTo(frame, CV_8U);
+    return frame;
+}
+
+fit::FaceParams faceAt(const Eigen::Vector3d& eulerDeg, const Eigen::Vector3d& translation, Eigen::Index expressions) {
+    fit::FaceParams params;
+    params.pose.head<3>() = fit::omegaFromEuler(eulerDeg);
+    params.pose.tail<3>() = translation;
+    params.expression = Eigen::VectorXd::Zero(expressions);
+    return params;
 }
 
 TEST(FaceWarp, LayoutCoversThePatchWithAnchorsSpreadOverTheFace) {
@@ -41,19 +62,8 @@ TEST(FaceWarp, PatchDoesNotChangeWhenTheCameraRollsAboutItsAxis) {
     // A smooth texture; the same face seen by a camera rolled by 20 degrees about its optical axis
     // is the image rotated about the principal point, and must give the same patch.
     const auto& s = scene();
-    std::mt19937 rng(2);
-    cv::Mat noise(480, 640, CV_32F);
-    cv::randn(noise, 0.0, 1.0);
-    cv::Mat smooth;
-    cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 6.0);
-    cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
-    cv::Mat frame;
-    smooth.convertTo(frame, CV_8U);
-
-    fit::FaceParams params;
-    params.pose.head<3>() = fit::omegaFromEuler({8.0, -15.0, 5.0});
-    params.pose.tail<3>() = Eigen::Vector3d(1.0, -1.0, 50.0);
-    params.expression = Eigen::VectorXd::Zero(s.layout.anchors.expressionCount());
+    const cv::Mat frame = smoothTexture(640, 480, 2);
+    const fit::FaceParams params = faceAt({8.0, -15.0, 5.0}, {1.0, -1.0, 50.0}, s.layout.anchors.expressionCount());
     cv::Mat patch;
     cnn::warpFace(s.layout, frame, cnn::projectAnchors(s.layout, {}, s.camera, params), patch);
 
@@ -91,6 +101,72 @@ TEST(FaceWarp, RejectsAWrongFrameOrAnchors) {
     // Anchors far outside a tiny frame: edge pixels repeated, no crash.
     cnn::warpFace(s.layout, cv::Mat(1, 1, CV_8UC1, cv::Scalar(7)), anchors, patch);
     EXPECT_EQ(cv::countNonZero(patch != 7), 0);
+}
+
+TEST(CascadeUpdate, TakesTheStartToTheFaceAndTurnsAboutTheFaceCentre) {
+    const auto& s = scene();
+    const Eigen::Index e = s.layout.anchors.expressionCount();
+    fit::FaceParams start = faceAt({5.0, 20.0, -3.0}, {2.0, 1.0, 45.0}, e), face = faceAt({-4.0, 32.0, 6.0}, {-1.0, 2.0, 50.0}, e);
+    start.expression.setConstant(0.2);
+    face.expression.setConstant(0.5);
+    fit::FaceParams moved = start;
+    cnn::applyUpdate(s.layout, cnn::updateBetween(s.layout, start, face), moved);
+    EXPECT_LT((moved.pose - face.pose).norm(), 1e-9);
+    EXPECT_LT((moved.expression - face.expression).norm(), 1e-12);
+    // A pure turn leaves the face centre where it was: the update's rotation is about it.
+    Eigen::VectorXd turn = Eigen::VectorXd::Zero(6 + e);
+    turn.head<3>() = Eigen::Vector3d(0.1, -0.2, 0.05);
+    fit::FaceParams turned = start;
+    cnn::applyUpdate(s.layout, turn, turned);
+    const auto centre = [&](const fit::FaceParams& p) { return Eigen::Vector3d(fit::rotationOf(p.omega()) * s.layout.centre + p.translation()); };
+    EXPECT_LT((centre(turned) - centre(start)).norm(), 1e-9);
+    EXPECT_GT((turned.translation() - start.translation()).norm(), 0.5);  // the model origin, behind the face, moved
+    EXPECT_NEAR(cnn::updateBetween(s.layout, start, turned).head<3>().norm(), turn.head<3>().norm(), 1e-9);
+    // Expressions stay in [0, 1].
+    Eigen::VectorXd push = Eigen::VectorXd::Zero(6 + e);
+    push.tail(e).setConstant(2.0);
+    cnn::applyUpdate(s.layout, push, turned);
+    EXPECT_EQ(turned.expression.maxCoeff(), 1.0);
+}
+
+TEST(FaceProfiling, TurnedFaceCarriesThePhotographsTextureAlong) {
+    const auto& s = scene();
+    const cv::Mat photo = smoothTexture(640, 480, 5);
+    const fit::FaceParams photographed = faceAt({0.0, 15.0, 0.0}, {0.0, 0.0, 50.0}, 0);
+    const std::vector<float> identity(static_cast<std::size_t>(s.model->identityCount()), 0.f);
+
+    // Not turned: the same image.
+    const auto same = profile::profileFace(*s.model, photo, s.camera, identity, {}, photographed, photographed);
+    cv::Mat difference;
+    cv::absdiff(same.image, photo, difference);
+    EXPECT_LT(cv::mean(difference)[0], 0.5);
+    EXPECT_LT(same.hidden_share, 0.03);  // vertices on the outline, rounded to a pixel behind it
+
+    // Turned 30 deg further: a front-facing point seen in both views keeps its grey level.
+    const fit::FaceParams turned = profile::turnedBy(photographed, 30.0);
+    EXPECT_NEAR(fit::eulerDegrees(turned.omega()).y(), 45.0, 0.5);
+    const auto face = profile::profileFace(*s.model, photo, s.camera, identity, {}, photographed, turned);
+    EXPECT_LT(face.hidden_share, 0.15);
+    const auto vertices = s.model->vertices({}, {});
+    const auto pixelOf = [&](const fit::FaceParams& p, const Vec3& v) {
+        return s.camera.project<double>(fit::rotationOf(p.omega()) * fit::modelToFrontal() * Eigen::Vector3d(v.x, v.y, v.z) / 10.0 +
+                                        p.translation());
+    };
+    double error = 0.0;
+    int points = 0;
+    // Nose, the near eye, mouth (the far eye is behind the nose at 45 deg).
+    for (const int landmark : {30, 33, 36, 39, 48, 51, 57, 62, 66}) {
+        const auto& v = vertices[s.model->data().landmark_vertices[static_cast<std::size_t>(landmark)]];
+        const Eigen::Vector2d from = pixelOf(photographed, v), to = pixelOf(turned, v);
+        error += std::abs(double(face.image.at<std::uint8_t>(cv::Point(int(std::lround(to.x())), int(std::lround(to.y()))))) -
+                          double(photo.at<std::uint8_t>(cv::Point(int(std::lround(from.x())), int(std::lround(from.y()))))));
+        ++points;
+    }
+    EXPECT_LT(error / points, 4.0);
+    // The image did change where the face is.
+    cv::absdiff(face.image, photo, difference);
+    EXPECT_GT(cv::mean(difference)[0], 1.0);
+    EXPECT_THROW(profile::profileFace(*s.model, cv::Mat(), s.camera, identity, {}, photographed, turned), Error);
 }
 
 }  // namespace

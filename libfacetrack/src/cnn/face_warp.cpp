@@ -65,6 +65,7 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
         anchors.push_back(p);
     }
     layout.anchors = fit::buildPointBasis(data, anchors, expressions);
+    layout.centre = layout.anchors.neutral.rowwise().mean();
     // Patch coordinates: the grown hull's box fills the patch but a 6 % margin, aspect kept.
     const double margin = 0.06 * size;
     const double scale = (size - 2 * margin) / std::max(box.width, box.height);

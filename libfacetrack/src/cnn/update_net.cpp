@@ -1,0 +1,77 @@
+#include "cnn/update_net.hpp"
+
+#include "facetrack/error.hpp"
+
+#include <algorithm>
+#include <filesystem>
+
+namespace facetrack::cnn {
+
+UpdateNet::UpdateNet(const std::string& onnxPath, int patchSize, int expressions)
+    : size_(patchSize), expressions_(expressions), update_(6 + expressions) {
+    if (!std::filesystem::exists(onnxPath)) throw Error("CNN stage '" + onnxPath + "' not found");
+    try {
+        net_ = cv::dnn::readNetFromONNX(onnxPath);
+    } catch (const cv::Exception& e) {
+        throw Error("CNN stage '" + onnxPath + "' does not load: " + e.what());
+    }
+    const int sizes[] = {1, 1, size_, size_};
+    input_.create(4, sizes, CV_32F);
+    input_.setTo(0);
+    net_.setInput(input_);
+    const cv::Mat out = net_.forward();
+    if (static_cast<int>(out.total()) != 6 + expressions_) {
+        throw Error("CNN stage '" + onnxPath + "' gives " + std::to_string(out.total()) + " outputs, not 6 + " +
+                    std::to_string(expressions_));
+    }
+}
+
+const Eigen::VectorXd& UpdateNet::predict(const cv::Mat& patch) {
+    if (patch.type() != CV_8UC1 || patch.rows != size_ || patch.cols != size_) throw Error("UpdateNet: the patch must be 8-bit grey, " + std::to_string(size_) + " square");
+    cv::Scalar mean, sigma;
+    cv::meanStdDev(patch, mean, sigma);
+    const double scale = 1.0 / std::max(sigma[0], 255.0 * 1e-3);
+    cv::Mat plane(size_, size_, CV_32F, input_.ptr<float>());
+    patch.convertTo(plane, CV_32F, scale, -mean[0] * scale);
+    net_.setInput(input_);
+    const cv::Mat out = net_.forward();
+    for (int k = 0; k < update_.size(); ++k) update_[k] = out.ptr<float>()[k];
+    return update_;
+}
+
+namespace {
+Eigen::Vector3d centreOf(const WarpLayout& layout, const fit::FaceParams& p) {
+    return fit::rotationOf(p.omega()) * layout.centre + p.translation();
+}
+}  // namespace
+
+Eigen::VectorXd updateBetween(const WarpLayout& layout, const fit::FaceParams& start, const fit::FaceParams& face) {
+    Eigen::VectorXd u(6 + start.expression.size());
+    const Eigen::AngleAxisd turn(fit::rotationOf(face.omega()) * fit::rotationOf(start.omega()).transpose());
+    u.head<3>() = turn.angle() * turn.axis();
+    const Eigen::Vector3d from = centreOf(layout, start);
+    u.segment<3>(3) = (centreOf(layout, face) - from) / from.z();
+    u.tail(start.expression.size()) = face.expression - start.expression;
+    return u;
+}
+
+void applyUpdate(const WarpLayout& layout, const Eigen::VectorXd& update, fit::FaceParams& params) {
+    Eigen::Vector3d centre = centreOf(layout, params);
+    centre += centre.z() * update.segment<3>(3);
+    const Eigen::Matrix3d rotation = fit::rotationOf(update.head<3>()) * fit::rotationOf(params.omega());
+    const Eigen::AngleAxisd r(rotation);
+    params.pose.head<3>() = r.angle() * r.axis();
+    params.pose.tail<3>() = centre - rotation * layout.centre;
+    const Eigen::Index n = std::min<Eigen::Index>(params.expression.size(), update.size() - 6);
+    for (Eigen::Index k = 0; k < n; ++k) params.expression[k] = std::clamp(params.expression[k] + update[6 + k], 0.0, 1.0);
+}
+
+void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera,
+            const Eigen::VectorXd& identity, fit::FaceParams& params, int iterations, cv::Mat& patch) {
+    for (int i = 0; i < iterations; ++i) {
+        warpFace(layout, grey, projectAnchors(layout, identity, camera, params), patch);
+        applyUpdate(layout, net.predict(patch), params);
+    }
+}
+
+}  // namespace facetrack::cnn

@@ -1,0 +1,55 @@
+#pragma once
+// One stage of the CNN cascade (thesis 4.4): a net regressing, from the face
+// texture warped at the current parameters (face_warp.hpp), the update that
+// takes those parameters to the face's own. Trained by
+// tools/train_cnn/train_stage.py (docs/cnn.md); run here with OpenCV's dnn.
+//
+// The net's input is the patch standardised per patch, (I - mean) / sigma
+// (population sigma, I in [0, 1]); its output, for E expressions in the
+// layout's order, is the update u = (dw, dc, db), 6 + E numbers, with
+// c = R c_0 + t the face centre (WarpLayout::centre c_0) in the camera frame:
+//   dw  (3): the angle-axis of R_face R_start^T, so R_face = R(dw) R_start;
+//   dc  (3): (c_face - c_start) / z(c_start), the centre's move over its depth;
+//   db  (E): b_face - b_start.
+// Turning about the centre rather than the model origin (behind the face)
+// keeps a turn from looking like a shift.
+
+#include "cnn/face_warp.hpp"
+
+#include <opencv2/dnn.hpp>
+
+#include <string>
+
+namespace facetrack::cnn {
+
+class UpdateNet {
+public:
+    /// Loads an ONNX export. Throws Error when the file is missing or not a
+    /// net of 1 x 64 x 64 -> 6 + `expressions` outputs.
+    UpdateNet(const std::string& onnxPath, int patchSize, int expressions);
+
+    int expressionCount() const { return expressions_; }
+
+    /// The update for `patch` (CV_8U, patchSize x patchSize): 6 + E values.
+    /// Not thread-safe (the net keeps its buffers): one per thread.
+    const Eigen::VectorXd& predict(const cv::Mat& patch);
+
+private:
+    cv::dnn::Net net_;
+    int size_, expressions_;
+    cv::Mat input_;
+    Eigen::VectorXd update_;
+};
+
+/// The update u(start -> face) defined above.
+Eigen::VectorXd updateBetween(const WarpLayout& layout, const fit::FaceParams& start, const fit::FaceParams& face);
+
+/// params <- the update applied: R(dw) R, c + z(c) dc, b + db clamped to [0, 1].
+void applyUpdate(const WarpLayout& layout, const Eigen::VectorXd& update, fit::FaceParams& params);
+
+/// `iterations` rounds of warp at params, predict, apply (the same net each
+/// round: a stage trained on its own residuals' range converges by repeating).
+void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera,
+            const Eigen::VectorXd& identity, fit::FaceParams& params, int iterations, cv::Mat& patch);
+
+}  // namespace facetrack::cnn

@@ -1,0 +1,52 @@
+#pragma once
+// Face profiling (Zhu et al., "Face Alignment Across Large Poses: A 3D
+// Solution", CVPR 2016, as 300W-LP was made for 3DDFA): the image of a face
+// turned further than it was photographed, made from the photograph and the
+// face model fitted to it, so that large-pose training and evaluation faces
+// carry their labels along (issue 17).
+//
+// With the fitted mesh X (identity a, expressions b) at the photographed pose
+// (R, t) and at the turned pose (R', t), each output pixel p takes the source
+// pixel s(p):
+//   - on the head: p lies in triangle T of the turned projection, nearest to
+//     the camera (z-buffer), with barycentric weights w; s(p) = sum_i w_i
+//     pi(R X_i + t), the same surface point in the photograph. When T was
+//     hidden there (turned away or behind another part), the photograph has
+//     no texture for it: a hole, filled from around it (Telea's inpainting)
+//     and counted;
+//   - elsewhere: a piecewise affine warp of the background, fixed at the
+//     image border, taking the photographed head's outline (the convex hull
+//     of its projection) to where the turned head puts those points.
+// Turning a face further in the direction it already looks reveals little
+// that was hidden; turning it back across the front reveals its far side,
+// mostly holes.
+
+#include "facetrack/face_model.hpp"
+#include "fit/camera.hpp"
+#include "fit/pose.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace facetrack::profile {
+
+struct ProfiledFace {
+    cv::Mat image;             ///< the turned face, same size and type as the source
+    double hidden_share = 0.0; ///< of the head's output pixels, the share whose surface was hidden in the source
+};
+
+/// `identity`: FaceModel::identityCount() values; `expression`: native
+/// weights (expressionNames() order, or empty); `photographed` and `turned`:
+/// poses in the fit's convention (fit/pose.hpp), expressions ignored.
+/// Throws Error on a source that is not 8-bit grey or colour.
+ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera, const std::vector<float>& identity,
+                         const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned);
+
+/// The pose turned by `yawDeg` about the camera's vertical axis through the
+/// model origin: R' = R_y(yaw) R, t' = t.
+fit::FaceParams turnedBy(const fit::FaceParams& params, double yawDeg);
+
+}  // namespace facetrack::profile
