@@ -16,29 +16,18 @@ namespace facetrack::bench {
 namespace {
 
 void BM_Gaze_BothEyes(benchmark::State& state) {
-    const cv::Mat frame = clipFrame("liveportrait_d14_gaze_shifts.mp4", 40, 640, 480);
-    if (skipWithoutShared(state, frame)) return;
     Models models = Models::loadDefault();
     if (!models.eyes) {
         state.SkipWithError("no eye model");
         return;
     }
-    Tracker tracker(models);
-    FrameResult result;
-    for (int i = 0; i < 5; ++i) tracker.process(core::viewOf(frame), i / 30.0, result);
-    if (result.faces.empty()) {
-        state.SkipWithError("no face in the frame");
-        return;
-    }
+    const auto tracked = trackedFrame(state, models, "liveportrait_d14_gaze_shifts.mp4", 40);
+    if (!tracked) return;
     auto stage = gaze::makeGazeStage(models.eyes, models.face, true);
     auto faceState = stage->newFaceState();
     pipeline::FaceTrack face;
-    face.result = result.faces[0];
-    cv::Mat gray;
-    cv::cvtColor(frame, gray, cv::COLOR_BGR2GRAY);
-    fit::Camera camera;
-    camera.fx = result.camera.fx, camera.fy = result.camera.fy, camera.cx = result.camera.cx, camera.cy = result.camera.cy;
-    const pipeline::FrameInput input{core::viewOf(frame), gray, camera, 1.0 / 30.0};
+    face.result = tracked->result.faces[0];
+    const pipeline::FrameInput input = tracked->input();
     for (auto _ : state) {
         stage->run(input, face, faceState.get());
         benchmark::DoNotOptimize(face.result.gaze);

@@ -1,6 +1,7 @@
 #include "bench_support.hpp"
 
 #include "core/environment.hpp"
+#include "core/image.hpp"
 #include "facetrack/version.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -25,6 +26,24 @@ bool skipWithoutShared(benchmark::State& state, const cv::Mat& frame) {
     if (!frame.empty()) return false;
     state.SkipWithError("../shared/data/clips not found (set FACETRACK_SHARED_DIR)");
     return true;
+}
+
+pipeline::FrameInput TrackedFrame::input() const { return {core::viewOf(frame), gray, camera, 1.0 / 30.0}; }
+
+std::optional<TrackedFrame> trackedFrame(benchmark::State& state, const Models& models, const std::string& clip, int index) {
+    TrackedFrame t;
+    t.frame = clipFrame(clip, index, 640, 480);
+    if (skipWithoutShared(state, t.frame)) return std::nullopt;
+    Tracker tracker(models);
+    for (int i = 0; i < 5; ++i) tracker.process(core::viewOf(t.frame), i / 30.0, t.result);
+    if (t.result.faces.empty()) {
+        state.SkipWithError("no face in the frame");
+        return std::nullopt;
+    }
+    cv::cvtColor(t.frame, t.gray, cv::COLOR_BGR2GRAY);
+    const CameraIntrinsics& c = t.result.camera;
+    t.camera.fx = c.fx, t.camera.fy = c.fy, t.camera.cx = c.cx, t.camera.cy = c.cy;
+    return t;
 }
 
 }  // namespace facetrack::bench

@@ -1,9 +1,14 @@
 #pragma once
 // Inputs for the benchmarks. Run them on one core: taskset -c 0 (docs/benchmarks.md).
 
+#include "pipeline/stage.hpp"
+
+#include "facetrack/tracker.hpp"
+
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <string>
 
 namespace facetrack::bench {
@@ -15,5 +20,17 @@ cv::Mat clipFrame(const std::string& clip, int index, int width, int height);
 
 /// Marks the benchmark skipped when the frame could not be loaded; true if so.
 bool skipWithoutShared(benchmark::State& state, const cv::Mat& frame);
+
+/// A frame after a few frames of tracking with `models`: a stage's input, to
+/// run one stage alone on a followed face.
+struct TrackedFrame {
+    cv::Mat frame, gray;
+    FrameResult result;  ///< faces[0] is the followed face
+    fit::Camera camera;
+    pipeline::FrameInput input() const;
+};
+
+/// Empty (and the benchmark marked skipped) without ../shared or a face.
+std::optional<TrackedFrame> trackedFrame(benchmark::State& state, const Models& models, const std::string& clip, int index);
 
 }  // namespace facetrack::bench

@@ -1,11 +1,18 @@
 // The CNN export path (tools/train_cnn, docs/cnn.md): a net exported by train_stage.py's export()
-// loads in OpenCV's dnn and gives torch's outputs. Fixture: tools/train_cnn/make_parity_fixture.py.
+// loads in OpenCV's dnn and gives torch's outputs (fixture: tools/train_cnn/make_parity_fixture.py);
+// the cascade's file format; the cnn stage wired into the Tracker.
 
+#include "cnn/cnn_model_data.hpp"
+#include "cnn/update_net.hpp"
+#include "facetrack/error.hpp"
+#include "facetrack/tracker.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/dnn.hpp>
 
+#include <cmath>
 #include <fstream>
+#include <iterator>
 
 namespace facetrack {
 namespace {
@@ -35,6 +42,92 @@ TEST(CnnExport, OpenCvDnnMatchesTorchOnStoredInputs) {
     double worst = 0.0;
     for (std::size_t i = 0; i < expected.size(); ++i) worst = std::max(worst, std::abs(double(out.ptr<float>()[i]) - expected[i]));
     EXPECT_LT(worst, 1e-4);
+}
+
+/// A cascade of the parity fixture's net (random weights; 6 pose + 1 expression outputs): for
+/// the file format and the wiring, not for accuracy.
+cnn::CnnModelData parityCascade() {
+    std::ifstream in(test::sourceDir() + "/tests/data/cnn_parity.onnx", std::ios::binary);
+    cnn::CnnModelData m;
+    m.expressions = {"jawOpen"};
+    m.stages.push_back({2, std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>())});
+    m.provenance = "the export parity fixture";
+    return m;
+}
+
+TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
+    const cnn::CnnModelData m = parityCascade();
+    const std::string path = test::tempPath("cascade.ftm");
+    cnn::writeCnnModel(path, m);
+    const auto loaded = CnnModel::load(path);
+    EXPECT_EQ(loaded->data().expressions, m.expressions);
+    ASSERT_EQ(loaded->rounds(), std::vector<int>{2});
+    EXPECT_EQ(loaded->data().stages[0].onnx, m.stages[0].onnx);
+    EXPECT_EQ(loaded->provenance(), m.provenance);
+    {
+        std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(200);
+        f.put('\x55');
+    }
+    try {
+        CnnModel::load(path);
+        ADD_FAILURE() << "a damaged cascade loaded";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(CnnModel::load(test::tempPath("no_such_cascade.ftm")), Error);
+    // A net of another output count, or not a net, is refused with its name.
+    try {
+        cnn::UpdateNet(m.stages[0].onnx, 64, 2, "stage 1");
+        ADD_FAILURE() << "a 7-output net passed for 6 + 2";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("stage 1 gives 7 outputs"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(cnn::UpdateNet("not an onnx file", 64, 1, "stage 1"), Error);
+    cnn::CnnModelData none = m;
+    none.stages.clear();
+    EXPECT_THROW(cnn::writeCnnModel(test::tempPath("empty.ftm"), none), Error);
+}
+
+TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string path = test::tempPath("cascade_stage.ftm");
+    cnn::writeCnnModel(path, parityCascade());
+    Models models = Models::loadDefault();
+    models.eyes = nullptr;
+    models.cnn = nullptr;
+    TrackerConfig config;
+    config.filter.enabled = false;
+    Tracker without(models, config);
+    models.cnn = CnnModel::load(path);
+    Tracker with(models, config);
+    const auto stages = with.stages();
+    const auto cnnStage = std::find_if(stages.begin(), stages.end(), [](const StageInfo& s) { return s.name == "cnn"; });
+    ASSERT_NE(cnnStage, stages.end());
+    EXPECT_TRUE(cnnStage->available) << cnnStage->detail;
+    EXPECT_NE(cnnStage->detail.find("2 rounds"), std::string::npos) << cnnStage->detail;
+    const auto names = with.estimatedShapes();
+    EXPECT_NE(std::find(names.begin(), names.end(), "jawOpen"), names.end());
+
+    const auto frames = test::clipFrames(10);
+    FrameResult a, b;
+    int differ = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const ImageView view{frames[i].data, frames[i].cols, frames[i].rows, frames[i].step, PixelFormat::Bgr8};
+        without.process(view, 0.04 * static_cast<double>(i), a);
+        with.process(view, 0.04 * static_cast<double>(i), b);
+        ASSERT_EQ(a.faces.size(), b.faces.size()) << "frame " << i;
+        if (b.faces.empty()) continue;
+        const HeadPose& pa = *a.faces[0].pose;
+        const HeadPose& pb = *b.faces[0].pose;
+        for (const float v : {pb.rotation.w, pb.rotation.x, pb.rotation.y, pb.rotation.z, pb.translation_mm.z}) EXPECT_TRUE(std::isfinite(v));
+        // The landmarks are the LBF's; the pose (random net's updates) is the cascade's.
+        EXPECT_EQ((*a.faces[0].landmarks)[30].x, (*b.faces[0].landmarks)[30].x);
+        differ += std::abs(pa.euler_deg.y - pb.euler_deg.y) > 0.01f || std::abs(pa.translation_mm.z - pb.translation_mm.z) > 0.01f;
+    }
+    EXPECT_GE(differ, 5);
+    const auto timing = std::find_if(b.timings.begin(), b.timings.end(), [](const StageTiming& t) { return t.stage == "cnn"; });
+    EXPECT_NE(timing, b.timings.end());
 }
 
 }  // namespace

@@ -251,7 +251,7 @@ TEST_F(StageRunner, NullStagesAndDetectorsAreRefused) {
 }
 
 TEST(TrackerApi, TakesTheApplicationsOwnDetector) {
-    Models models{FaceModel::load(test::shippedFaceModel()), nullptr, nullptr};
+    Models models{FaceModel::load(test::shippedFaceModel()), nullptr, nullptr, nullptr};
     int calls = 0;
     Tracker tracker(models, {}, std::make_unique<FakeDetector>(&calls));
     EXPECT_EQ(tracker.stages()[0].detail.rfind("fake (none)", 0), 0u) << tracker.stages()[0].detail;

@@ -19,7 +19,7 @@ namespace {
 /// The shipped face model, without a landmark model: the landmarks stage is off.
 Models faceOnly() {
     static const auto model = FaceModel::load(test::shippedFaceModel());
-    return Models{model, nullptr, nullptr};
+    return Models{model, nullptr, nullptr, nullptr};
 }
 
 using test::clipFrames;

@@ -7,26 +7,32 @@
 // (the angle of R_est R_label^T), the depth error, the expression error and
 // the share of starts within 3 deg of the label.
 //
-//   build/tools/eval_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] [--iterations 3] [--starts 5]
-//                        [--split validation] [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels]
+//   build/tools/eval_cnn [--cascade models/cnn_cascade.ftm] [--starts 5] [--split validation]
+//                        [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--profiled N]
 //
-// Round i runs net min(i, count - 1): a list of stages, the last one repeated.
+// With --profiled N, also N tries per crop of a copy turned to large yaw by face
+// profiling (profile/face_profiling.hpp, the large-pose evaluation set), the
+// errors by 15 deg bin of the copy's |yaw|, from perturbed starts and from LBF + fit.
+//
+// The rounds are the cascade's: each stage run as often as the file says.
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
+#include "cnn/cnn_model_data.hpp"
 #include "cnn/update_net.hpp"
 #include "common/faces300w.hpp"
 #include "dense/dense_fit.hpp"
 #include "dense/label_table.hpp"
+#include "facetrack/cnn_model.hpp"
 #include "facetrack/face_model.hpp"
+#include "facetrack/tracker.hpp"
+#include "profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cstdio>
-#include <memory>
 #include <random>
-#include <sstream>
 
 using namespace facetrack;
 
@@ -55,54 +61,109 @@ void report(const char* name, RoundErrors e) {
 
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--nets", "--iterations", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w"}, {"--help"});
-    if (args.has("--help") || !args.has("--nets")) {
-        std::puts("usage: eval_cnn --nets A.onnx[,B.onnx] [--iterations 3] [--starts 5] [--split validation]\n"
-                  "       [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--faces300w DIR]");
-        return args.has("--help") ? 0 : 2;
+                           {"--cascade", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w", "--profiled"}, {"--help"});
+    if (args.has("--help")) {
+        std::puts("usage: eval_cnn [--cascade models/cnn_cascade.ftm] [--starts 5] [--split validation]\n"
+                  "       [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--faces300w DIR] [--profiled N]");
+        return 0;
     }
     const std::string split = args.get("--split", "validation");
     if (split == "train") throw Error("eval_cnn measures held-out crops: --split validation or test");
-    const int iterations = static_cast<int>(args.number("--iterations", 3));
     const int starts = static_cast<int>(args.number("--starts", 5));
     const double yawDeg = args.number("--yaw-deg", 15.0), depth = args.number("--depth", 0.10);
-    if (iterations < 1 || starts < 1) throw Error("--iterations and --starts must be at least 1");
+    if (starts < 1) throw Error("--starts must be at least 1");
 
     const auto model = FaceModel::load(FaceModel::defaultPath());
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), dense::labelledExpressions(model->data()));
-    const int expressions = static_cast<int>(layout.anchors.expressions.size());
-    std::vector<std::unique_ptr<cnn::UpdateNet>> nets;
-    std::stringstream list(args.get("--nets"));
-    for (std::string path; std::getline(list, path, ',');) nets.push_back(std::make_unique<cnn::UpdateNet>(path, layout.size, expressions));
+    const auto cascade = CnnModel::load(args.get("--cascade", CnnModel::defaultPath()));
+    const cnn::CnnModelData& data = cascade->data();
+    std::vector<int> expressionIds;
+    for (const auto& name : data.expressions) {
+        const auto& all = model->expressionNames();
+        expressionIds.push_back(static_cast<int>(std::find(all.begin(), all.end(), name) - all.begin()));
+        if (expressionIds.back() == static_cast<int>(all.size())) throw Error("the face model has no expression '" + name + "'");
+    }
+    const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), expressionIds, data.patch_size);
+    std::vector<cnn::UpdateNet> nets;
+    std::vector<std::size_t> roundNet;  // per round, its stage
+    for (std::size_t i = 0; i < data.stages.size(); ++i) {
+        nets.emplace_back(data.stages[i].onnx, data.patch_size, static_cast<int>(data.expressions.size()), "stage " + std::to_string(i + 1));
+        roundNet.insert(roundNet.end(), static_cast<std::size_t>(data.stages[i].rounds), i);
+    }
+    const int iterations = static_cast<int>(roundNet.size());
 
     const auto table = dense::readLabelTable(args.get("--labels", "build/dense_labels") + "/faces300w.csv");
-    const dense::LabelColumns columns = dense::labelColumns(table, layout.anchors.expressionNames(model->data()));
+    const dense::LabelColumns columns = dense::labelColumns(table, data.expressions);
     const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
     std::mt19937 rng(23);
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
-    std::vector<RoundErrors> rounds(static_cast<std::size_t>(iterations + 1));
-    cv::Mat patch;
-    int crops = 0;
+    std::vector<RoundErrors> rounds(static_cast<std::size_t>(iterations + 1)), fromFit(static_cast<std::size_t>(iterations + 1));
+    const int profiledTries = static_cast<int>(args.number("--profiled", 0));
+    constexpr int kBins = 5;  // |yaw| 15-30, ..., 75-90 deg
+    std::vector<std::vector<RoundErrors>> binned(kBins, std::vector<RoundErrors>(static_cast<std::size_t>(iterations + 1)));
+    std::vector<std::vector<RoundErrors>> binnedFit(kBins, std::vector<RoundErrors>(static_cast<std::size_t>(iterations + 1)));
+    std::vector<int> binFaces(kBins, 0), binUnfitted(kBins, 0);
+    // The other start: what the tracker's LBF + fit say of the still crop (mean identity, as a
+    // face's first frames have).
+    TrackerConfig still;
+    still.filter.enabled = false;
+    Tracker lbf(Models{model, LandmarkModel::loadDefault(), nullptr, nullptr}, still);
+    FrameResult result;
+    cnn::RefineWork work;
+    const auto record = [&](std::vector<RoundErrors>& errors, int round, const fit::FaceParams& params, const fit::FaceParams& label) {
+        RoundErrors& e = errors[static_cast<std::size_t>(round)];
+        e.rotation_deg.push_back(rotationErrorDeg(params, label));
+        e.depth_pct.push_back(100.0 * std::abs(params.pose[5] - label.pose[5]) / label.pose[5]);
+        e.expression.push_back((params.expression - label.expression).cwiseAbs().mean());
+    };
+    const auto cascadeFrom = [&](fit::FaceParams params, const fit::FaceParams& label, const cv::Mat& grey, const fit::Camera& camera,
+                                 std::vector<RoundErrors>& errors) {
+        for (int i = 0; i <= iterations; ++i) {
+            if (i > 0) cnn::refine(layout, nets[roundNet[static_cast<std::size_t>(i - 1)]], grey, camera, params, 1, work);
+            record(errors, i, params, label);
+        }
+    };
+    int crops = 0, unfitted = 0;
     for (const auto& row : table.rows) {
         if (row.split != split) continue;
         const cv::Mat grey = cv::imread(root + "/" + row.key, cv::IMREAD_GRAYSCALE);
         if (grey.empty()) throw Error("cannot read " + root + "/" + row.key);
         const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
         const fit::FaceParams label = dense::labelParams(columns, row);
-        const Eigen::VectorXd identity = dense::labelIdentity(columns, row);
-        for (int s = 0; s < starts; ++s) {
-            fit::FaceParams params = label;  // turned about the face centre and scaled
-            Eigen::VectorXd move = Eigen::VectorXd::Zero(6);
-            move[1] = yawDeg * M_PI / 180.0 * sym(rng);
-            const Eigen::Vector3d centre = fit::rotationOf(label.omega()) * layout.centre + label.translation();
-            move.segment<3>(3) = depth * sym(rng) * centre / centre.z();
-            cnn::applyUpdate(layout, move, params);
-            for (int i = 0; i <= iterations; ++i) {
-                if (i > 0) cnn::refine(layout, *nets[static_cast<std::size_t>(std::min<int>(i - 1, static_cast<int>(nets.size()) - 1))], grey, camera, identity, params, 1, patch);
-                RoundErrors& e = rounds[static_cast<std::size_t>(i)];
-                e.rotation_deg.push_back(rotationErrorDeg(params, label));
-                e.depth_pct.push_back(100.0 * std::abs(params.pose[5] - label.pose[5]) / label.pose[5]);
-                e.expression.push_back((params.expression - label.expression).cwiseAbs().mean());
+        const Eigen::VectorXd labelIdentity = dense::labelIdentity(columns, row);
+        // One image: `starts` perturbed starts, and the tracker's LBF + fit, each through the cascade.
+        const auto evaluate = [&](const cv::Mat& image, const fit::FaceParams& truth, std::vector<RoundErrors>& perturbed,
+                                  std::vector<RoundErrors>& fitted) {
+            work.identity_shape = fit::shapeWithIdentity(layout.anchors, labelIdentity);
+            for (int s = 0; s < starts; ++s) {
+                fit::FaceParams params = truth;  // turned about the face centre and scaled
+                Eigen::VectorXd move = Eigen::VectorXd::Zero(6);
+                move[1] = yawDeg * M_PI / 180.0 * sym(rng);
+                const Eigen::Vector3d centre = fit::rotationOf(truth.omega()) * layout.centre + truth.translation();
+                move.segment<3>(3) = depth * sym(rng) * centre / centre.z();
+                cnn::applyUpdate(layout, move, params);
+                cascadeFrom(params, truth, image, camera, perturbed);
+            }
+            lbf.reset();
+            lbf.process(ImageView{image.data, image.cols, image.rows, image.step, PixelFormat::Gray8}, 0.0, result);
+            if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) return false;
+            fit::FaceParams start = truth;
+            fit::poseParamsOf(*result.faces[0].pose, start);
+            for (std::size_t k = 0; k < expressionIds.size(); ++k)
+                start.expression[static_cast<Eigen::Index>(k)] = result.faces[0].expression->native[static_cast<std::size_t>(expressionIds[k])];
+            work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
+            cascadeFrom(start, truth, image, camera, fitted);
+            return true;
+        };
+        if (!evaluate(grey, label, rounds, fromFit)) ++unfitted;
+        if (profiledTries > 0) {
+            const std::vector<float> identity(labelIdentity.data(), labelIdentity.data() + labelIdentity.size());
+            for (const auto& copy : profile::profiledCopies(*model, grey, camera, identity,
+                                                            profile::nativeWeights(*model, expressionIds, label.expression), label,
+                                                            profiledTries, rng)) {
+                const int bin = std::clamp(static_cast<int>(std::abs(fit::eulerDegrees(copy.label.omega()).y()) / 15.0) - 1, 0, kBins - 1);
+                ++binFaces[static_cast<std::size_t>(bin)];
+                if (!evaluate(copy.image, copy.label, binned[static_cast<std::size_t>(bin)], binnedFit[static_cast<std::size_t>(bin)]))
+                    ++binUnfitted[static_cast<std::size_t>(bin)];
             }
         }
         if (++crops % 20 == 0) std::fprintf(stderr, "\r%d crops", crops);
@@ -112,6 +173,18 @@ int run(int argc, char** argv) {
     std::printf("%d %s crops x %d starts (yaw +-%.0f deg, scale +-%.0f %%), against the dense teacher labels:\n", crops, split.c_str(), starts,
                 yawDeg, 100.0 * depth);
     for (int i = 0; i <= iterations; ++i) report(i == 0 ? "start" : ("round " + std::to_string(i)).c_str(), rounds[static_cast<std::size_t>(i)]);
+    std::printf("from the tracker's LBF + fit (%d crops; %d without a fitted face):\n", crops - unfitted, unfitted);
+    for (int i = 0; i <= iterations; ++i) report(i == 0 ? "fit" : ("round " + std::to_string(i)).c_str(), fromFit[static_cast<std::size_t>(i)]);
+    for (int bin = 0; bin < kBins; ++bin) {
+        if (binFaces[static_cast<std::size_t>(bin)] == 0) continue;
+        std::printf("profiled, |yaw| %d-%d deg: %d faces (%d without a fitted face)\n", 15 * (bin + 1), 15 * (bin + 2),
+                    binFaces[static_cast<std::size_t>(bin)], binUnfitted[static_cast<std::size_t>(bin)]);
+        const auto& b = binned[static_cast<std::size_t>(bin)];
+        const auto& f = binnedFit[static_cast<std::size_t>(bin)];
+        report("  start", b.front());
+        report("  cascade", b.back());
+        if (!f.front().rotation_deg.empty()) report("  fit", f.front()), report("  fit+cnn", f.back());
+    }
     return 0;
 }
 

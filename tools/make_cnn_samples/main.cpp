@@ -134,49 +134,29 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
     return own;
 }
 
-/// The label's expressions as the face model's native weights (the others 0).
-std::vector<float> nativeExpression(const FaceModel& model, const cnn::WarpLayout& layout, const fit::FaceParams& label) {
-    std::vector<float> native(model.expressionNames().size(), 0.f);
-    for (std::size_t k = 0; k < layout.anchors.expressions.size(); ++k)
-        native[static_cast<std::size_t>(layout.anchors.expressions[k])] = static_cast<float>(label.expression[static_cast<Eigen::Index>(k)]);
-    return native;
-}
-
-/// Face profiling of a 300-W crop (profile/face_profiling.hpp): `count` copies
-/// turned further the way the face looks, to |yaw| uniform in [max(|yaw| + 10, 25), 85] deg,
-/// each with its samples; copies whose turned head is more than 15 % hidden
-/// surface are skipped. Returns the copies made.
+/// Face profiling of a 300-W crop (profile::profiledCopies), each copy with its samples.
+/// Returns the copies made.
 int profiledSamplesOf(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, int count,
                       const Perturbation& perturb, std::mt19937& rng, PatchWriter& patches, std::ofstream& samples) {
-    constexpr double kMaxHidden = 0.15, kMaxYawDeg = 85.0;
-    const double yaw = fit::eulerDegrees(image.label.omega()).y();
-    const double lowest = std::max(std::abs(yaw) + 10.0, 25.0);
-    if (lowest >= kMaxYawDeg) return 0;
     const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
-    const std::vector<float> native = nativeExpression(model, layout, image.label);
-    std::uniform_real_distribution<double> target(lowest, kMaxYawDeg), coin(0.0, 1.0);
-    const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
-    int made = 0;
-    for (int n = 0; n < count; ++n) {
-        const double side = std::abs(yaw) > 3.0 ? (yaw > 0 ? 1.0 : -1.0) : (coin(rng) < 0.5 ? -1.0 : 1.0);
-        const double goal = target(rng);
+    const auto copies = profile::profiledCopies(model, grey, fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity,
+                                                profile::nativeWeights(model, layout.anchors.expressions, image.label.expression), image.label,
+                                                count, rng);
+    for (const auto& copy : copies) {
         LabelledImage turned = image;
-        turned.label = profile::turnedBy(image.label, side * (goal - std::abs(yaw)));
-        const profile::ProfiledFace face = profile::profileFace(model, grey, camera, identity, native, image.label, turned.label);
-        if (face.hidden_share > kMaxHidden) continue;
+        turned.label = copy.label;
         char suffix[32];
-        std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(turned.label.omega()).y());
+        std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(copy.label.omega()).y());
         turned.key += suffix;
-        samplesOf(layout, turned, face.image, perturb, rng, patches, samples);
-        ++made;
+        samplesOf(layout, turned, copy.image, perturb, rng, patches, samples);
     }
-    return made;
+    return static_cast<int>(copies.size());
 }
 
 /// A frame beside its copy turned 40 deg further the way it looks, 240 px high, for the docs.
 cv::Mat profiledPair(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey) {
     const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
-    const std::vector<float> native = nativeExpression(model, layout, image.label);
+    const std::vector<float> native = profile::nativeWeights(model, layout.anchors.expressions, image.label.expression);
     const double yaw = fit::eulerDegrees(image.label.omega()).y();
     const fit::FaceParams turned = profile::turnedBy(image.label, yaw >= 0 ? 40.0 : -40.0);
     const auto face = profile::profileFace(model, grey, fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity, native, image.label, turned);

@@ -134,6 +134,31 @@ void backgroundMap(const View& photographed, const View& turned, int width, int 
 
 }  // namespace
 
+std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+                                         const std::vector<float>& identity, const std::vector<float>& expression,
+                                         const fit::FaceParams& label, int tries, std::mt19937& rng) {
+    constexpr double kMaxHidden = 0.15, kMaxYawDeg = 85.0;
+    const double yaw = fit::eulerDegrees(label.omega()).y();
+    const double lowest = std::max(std::abs(yaw) + 10.0, 25.0);
+    std::vector<ProfiledCopy> copies;
+    if (lowest >= kMaxYawDeg) return copies;
+    std::uniform_real_distribution<double> target(lowest, kMaxYawDeg), coin(0.0, 1.0);
+    for (int n = 0; n < tries; ++n) {
+        const double side = std::abs(yaw) > 3.0 ? (yaw > 0 ? 1.0 : -1.0) : (coin(rng) < 0.5 ? -1.0 : 1.0);
+        const fit::FaceParams turned = turnedBy(label, side * (target(rng) - std::abs(yaw)));
+        ProfiledFace face = profileFace(model, source, camera, identity, expression, label, turned);
+        if (face.hidden_share <= kMaxHidden) copies.push_back({std::move(face.image), turned});
+    }
+    return copies;
+}
+
+std::vector<float> nativeWeights(const FaceModel& model, const std::vector<int>& ids, const Eigen::VectorXd& weights) {
+    std::vector<float> native(model.expressionNames().size(), 0.f);
+    for (std::size_t k = 0; k < ids.size() && k < static_cast<std::size_t>(weights.size()); ++k)
+        native[static_cast<std::size_t>(ids[k])] = static_cast<float>(weights[static_cast<Eigen::Index>(k)]);
+    return native;
+}
+
 fit::FaceParams turnedBy(const fit::FaceParams& params, double yawDeg) {
     fit::FaceParams out = params;
     const Eigen::AngleAxisd r(fit::rotationOf(fit::omegaFromEuler(Eigen::Vector3d(0, yawDeg, 0))) * fit::rotationOf(params.omega()));

@@ -29,6 +29,7 @@
 
 #include <Eigen/Core>
 
+#include <random>
 #include <vector>
 
 namespace facetrack::profile {
@@ -44,6 +45,23 @@ struct ProfiledFace {
 /// Throws Error on a source that is not 8-bit grey or colour.
 ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera, const std::vector<float>& identity,
                          const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned);
+
+struct ProfiledCopy {
+    cv::Mat image;
+    fit::FaceParams label;  ///< the turned pose, the photograph's expressions
+};
+
+/// `tries` copies of a labelled photograph turned further the way it looks
+/// (either way when |yaw| < 3 deg) to |yaw| uniform in [max(|yaw| + 10, 25),
+/// 85] deg; copies whose head is more than 15 % hidden surface are dropped,
+/// and a face already past 75 deg gets none.
+std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+                                         const std::vector<float>& identity, const std::vector<float>& expression,
+                                         const fit::FaceParams& label, int tries, std::mt19937& rng);
+
+/// Native expression weights (FaceModel::expressionNames() order) from weights
+/// of the expressions `ids` (indices into those names); the others 0.
+std::vector<float> nativeWeights(const FaceModel& model, const std::vector<int>& ids, const Eigen::VectorXd& weights);
 
 /// The pose turned by `yawDeg` about the camera's vertical axis through the
 /// model origin: R' = R_y(yaw) R, t' = t.

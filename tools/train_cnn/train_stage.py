@@ -80,6 +80,12 @@ def export(net, path, scale=None):
                       do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
 
 
+def write_columns(out, columns):
+    """The outputs' names beside the net (pack_cnn checks them)."""
+    with open(out + ".columns.txt", "w") as f:
+        f.write("\n".join(columns) + "\n")
+
+
 class Stage(torch.nn.Module):
     """64x64 grey -> (6 + E): four stride-2 conv blocks (BatchNorm, ReLU), two linear layers."""
 
@@ -105,6 +111,7 @@ def main():
     p.add_argument("--minutes", type=float, default=30)
     p.add_argument("--batch", type=int, default=128)
     p.add_argument("--resume", action="store_true")
+    p.add_argument("--export-only", action="store_true", help="export OUT.pt's net (e.g. while it trains) and stop")
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args()
     torch.set_num_threads(a.threads)
@@ -139,6 +146,12 @@ def main():
     net = Stage(y_train.shape[1])
     opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
     epoch, started = 0, time.time()
+    if a.export_only:
+        net.load_state_dict(torch.load(a.out + ".pt")["net"])
+        export(net, a.out + ".onnx", scale)
+        write_columns(a.out, columns)
+        print(f"wrote {a.out}.onnx", flush=True)
+        return
     if a.resume and os.path.exists(a.out + ".pt"):
         state = torch.load(a.out + ".pt")
         net.load_state_dict(state["net"]); opt.load_state_dict(state["opt"]); epoch = state["epoch"]
@@ -188,8 +201,7 @@ def main():
     net.eval()
 
     export(net, a.out + ".onnx", scale)
-    with open(a.out + ".columns.txt", "w") as f:
-        f.write("\n".join(columns) + "\n")
+    write_columns(a.out, columns)
     print(f"wrote {a.out}.onnx", flush=True)
 
 

@@ -6,6 +6,7 @@
 #include "facetrack/arkit.hpp"
 #include "facetrack/async_tracker.hpp"
 #include "facetrack/capture.hpp"
+#include "facetrack/cnn_model.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/eye_model.hpp"

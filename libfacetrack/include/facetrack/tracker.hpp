@@ -10,6 +10,7 @@
 /// number of Trackers on any threads. A Tracker follows one video stream and
 /// is used by one thread at a time; run one Tracker per stream or per thread.
 
+#include "facetrack/cnn_model.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/eye_model.hpp"
 #include "facetrack/face_model.hpp"
@@ -36,9 +37,10 @@ struct Models {
     std::shared_ptr<const FaceModel> face;            ///< required
     std::shared_ptr<const LandmarkModel> landmarks;   ///< null: the landmarks stage is not available
     std::shared_ptr<const EyeModel> eyes;             ///< null: the gaze stage is not available
+    std::shared_ptr<const CnnModel> cnn;              ///< null: the cnn stage is not available
 
-    /// The shipped models from modelDirectory(). A missing landmark or eye
-    /// model leaves its pointer null (and is logged); any other problem throws Error.
+    /// The shipped models from modelDirectory(). A missing landmark, eye or
+    /// CNN model leaves its pointer null (and is logged); any other problem throws Error.
     static Models loadDefault();
 };
 

@@ -110,6 +110,9 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
             }
         }
     }
+    Eigen::MatrixXd a(layout.anchorCount(), 3);
+    a << layout.canonical.leftCols(layout.anchorCount()).transpose(), Eigen::VectorXd::Ones(layout.anchorCount());
+    layout.affine_solve = (a.transpose() * a).inverse() * a.transpose();
     return layout;
 }
 
@@ -117,27 +120,31 @@ Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd&
                                 const fit::FaceParams& params) {
     const Eigen::Matrix3Xd base =
         fit::shapeWithIdentity(layout.anchors, identity.size() == layout.anchors.identityCount() ? identity : Eigen::VectorXd());
-    Eigen::Matrix3Xd x;
-    fit::slotPositions(layout.anchors, base, params.expression, x);
-    const Eigen::Matrix3d rotation = fit::rotationOf(params.omega());
-    Eigen::Matrix2Xd out(2, x.cols());
-    for (Eigen::Index i = 0; i < x.cols(); ++i) out.col(i) = camera.project<double>(rotation * x.col(i) + params.translation());
+    Eigen::Matrix3Xd work;
+    Eigen::Matrix2Xd out;
+    projectAnchors(layout, base, camera, params, work, out);
     return out;
+}
+
+void projectAnchors(const WarpLayout& layout, const Eigen::Matrix3Xd& identityShape, const fit::Camera& camera,
+                    const fit::FaceParams& params, Eigen::Matrix3Xd& work, Eigen::Matrix2Xd& out) {
+    fit::slotPositions(layout.anchors, identityShape, params.expression, work);
+    const Eigen::Matrix3d rotation = fit::rotationOf(params.omega());
+    out.resize(2, work.cols());
+    for (Eigen::Index i = 0; i < work.cols(); ++i) out.col(i) = camera.project<double>(rotation * work.col(i) + params.translation());
 }
 
 void warpFace(const WarpLayout& layout, const cv::Mat& frame, const Eigen::Matrix2Xd& anchors, cv::Mat& patch) {
     if (frame.type() != CV_8UC1 || frame.empty()) throw Error("warpFace: expected an 8-bit grey frame");
     const int n = layout.anchorCount();
     if (anchors.cols() != n || !anchors.allFinite()) throw Error("warpFace: expected " + std::to_string(n) + " finite anchor positions");
-    // Boundary points: the least-squares affine map canonical -> frame of the anchors.
-    Eigen::MatrixXd a(n, 3);
-    a << layout.canonical.leftCols(n).transpose(), Eigen::VectorXd::Ones(n);
-    const Eigen::Matrix<double, 3, 2> affine = a.colPivHouseholderQr().solve(anchors.transpose());
-    Eigen::Matrix2Xd framePoints(2, layout.canonical.cols());
-    framePoints.leftCols(n) = anchors;
-    for (Eigen::Index i = n; i < layout.canonical.cols(); ++i)
-        framePoints.col(i) = affine.transpose() * Eigen::Vector3d(layout.canonical(0, i), layout.canonical(1, i), 1.0);
-
+    // Boundary points follow the least-squares affine map canonical -> frame of the anchors.
+    Eigen::Matrix<double, 3, 2> affine;
+    affine.noalias() = layout.affine_solve * anchors.transpose();
+    const auto framePoint = [&](int i) -> Eigen::Vector2d {
+        if (i < n) return anchors.col(i);
+        return affine.transpose() * Eigen::Vector3d(layout.canonical(0, i), layout.canonical(1, i), 1.0);
+    };
     patch.create(layout.size, layout.size, CV_8UC1);
     const int w = frame.cols, h = frame.rows;
     for (int y = 0; y < layout.size; ++y) {
@@ -151,8 +158,8 @@ void warpFace(const WarpLayout& layout, const cv::Mat& frame, const Eigen::Matri
             }
             const auto& tri = layout.triangles[static_cast<std::size_t>(t)];
             const Eigen::Vector3f& bw = layout.pixel_weights[k];
-            const double u = bw[0] * framePoints(0, tri[0]) + bw[1] * framePoints(0, tri[1]) + bw[2] * framePoints(0, tri[2]);
-            const double v = bw[0] * framePoints(1, tri[0]) + bw[1] * framePoints(1, tri[1]) + bw[2] * framePoints(1, tri[2]);
+            const Eigen::Vector2d f = bw[0] * framePoint(tri[0]) + bw[1] * framePoint(tri[1]) + bw[2] * framePoint(tri[2]);
+            const double u = f.x(), v = f.y();
             const double cu = std::clamp(u, 0.0, w - 1.0), cv = std::clamp(v, 0.0, h - 1.0);
             const int x0 = std::min(static_cast<int>(cu), w - 2 < 0 ? 0 : w - 2), y0 = std::min(static_cast<int>(cv), h - 2 < 0 ? 0 : h - 2);
             const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);

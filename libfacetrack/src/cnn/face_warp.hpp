@@ -34,6 +34,9 @@ struct WarpLayout {
     /// Per patch pixel (row-major): its triangle, -1 for none, and its barycentric weights.
     std::vector<int> pixel_triangle;
     std::vector<Eigen::Vector3f> pixel_weights;
+    /// (A^T A)^-1 A^T for A = [canonical anchors^T 1]: times the anchors' frame
+    /// positions (transposed), the least-squares affine map canonical -> frame.
+    Eigen::Matrix<double, 3, Eigen::Dynamic> affine_solve;
 
     int anchorCount() const { return anchors.slotCount(); }
     int boundaryCount() const { return static_cast<int>(canonical.cols()) - anchorCount(); }
@@ -48,10 +51,14 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
 /// the mean face) and params (expression in `expressions` order, or empty).
 Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd& identity, const fit::Camera& camera,
                                 const fit::FaceParams& params);
+/// The same from the anchors' identity shape (fit::shapeWithIdentity of
+/// layout.anchors), into `out` through `work`: no allocation once they are sized.
+void projectAnchors(const WarpLayout& layout, const Eigen::Matrix3Xd& identityShape, const fit::Camera& camera,
+                    const fit::FaceParams& params, Eigen::Matrix3Xd& work, Eigen::Matrix2Xd& out);
 
 /// Warps the grey frame into `patch` (CV_8U, size x size; bilinear, edge
 /// pixels repeated past the frame's border). Throws Error when `frame` is not
-/// 8-bit grey or `anchors` has the wrong size.
+/// 8-bit grey or `anchors` has the wrong size. No allocation once `patch` is sized.
 void warpFace(const WarpLayout& layout, const cv::Mat& frame, const Eigen::Matrix2Xd& anchors, cv::Mat& patch);
 
 }  // namespace facetrack::cnn

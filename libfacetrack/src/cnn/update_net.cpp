@@ -3,25 +3,28 @@
 #include "facetrack/error.hpp"
 
 #include <algorithm>
-#include <filesystem>
 
 namespace facetrack::cnn {
 
-UpdateNet::UpdateNet(const std::string& onnxPath, int patchSize, int expressions)
+UpdateNet::UpdateNet(const std::string& onnx, int patchSize, int expressions, const std::string& what)
     : size_(patchSize), expressions_(expressions), update_(6 + expressions) {
-    if (!std::filesystem::exists(onnxPath)) throw Error("CNN stage '" + onnxPath + "' not found");
     try {
-        net_ = cv::dnn::readNetFromONNX(onnxPath);
+        net_ = cv::dnn::readNetFromONNX(onnx.data(), onnx.size());
     } catch (const cv::Exception& e) {
-        throw Error("CNN stage '" + onnxPath + "' does not load: " + e.what());
+        throw Error(what + " does not load: " + e.what());
     }
+    if (net_.empty()) throw Error(what + " does not load");
     const int sizes[] = {1, 1, size_, size_};
     input_.create(4, sizes, CV_32F);
     input_.setTo(0);
     net_.setInput(input_);
-    const cv::Mat out = net_.forward();
-    if (static_cast<int>(out.total()) != 6 + expressions_) {
-        throw Error("CNN stage '" + onnxPath + "' gives " + std::to_string(out.total()) + " outputs, not 6 + " +
+    try {
+        net_.forward(outputs_);
+    } catch (const cv::Exception& e) {
+        throw Error(what + " does not run on a " + std::to_string(size_) + " px patch: " + e.what());
+    }
+    if (outputs_.size() != 1 || static_cast<int>(outputs_[0].total()) != 6 + expressions_) {
+        throw Error(what + " gives " + std::to_string(outputs_.empty() ? 0 : outputs_[0].total()) + " outputs, not 6 + " +
                     std::to_string(expressions_));
     }
 }
@@ -34,8 +37,9 @@ const Eigen::VectorXd& UpdateNet::predict(const cv::Mat& patch) {
     cv::Mat plane(size_, size_, CV_32F, input_.ptr<float>());
     patch.convertTo(plane, CV_32F, scale, -mean[0] * scale);
     net_.setInput(input_);
-    const cv::Mat out = net_.forward();
-    for (int k = 0; k < update_.size(); ++k) update_[k] = out.ptr<float>()[k];
+    net_.forward(outputs_);
+    const float* out = outputs_[0].ptr<float>();
+    for (int k = 0; k < update_.size(); ++k) update_[k] = out[k];
     return update_;
 }
 
@@ -66,11 +70,12 @@ void applyUpdate(const WarpLayout& layout, const Eigen::VectorXd& update, fit::F
     for (Eigen::Index k = 0; k < n; ++k) params.expression[k] = std::clamp(params.expression[k] + update[6 + k], 0.0, 1.0);
 }
 
-void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera,
-            const Eigen::VectorXd& identity, fit::FaceParams& params, int iterations, cv::Mat& patch) {
-    for (int i = 0; i < iterations; ++i) {
-        warpFace(layout, grey, projectAnchors(layout, identity, camera, params), patch);
-        applyUpdate(layout, net.predict(patch), params);
+void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
+            int rounds, RefineWork& work) {
+    for (int i = 0; i < rounds; ++i) {
+        projectAnchors(layout, work.identity_shape, camera, params, work.anchors3d, work.anchors);
+        warpFace(layout, grey, work.anchors, work.patch);
+        applyUpdate(layout, net.predict(work.patch), params);
     }
 }
 

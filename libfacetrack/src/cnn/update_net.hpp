@@ -24,9 +24,10 @@ namespace facetrack::cnn {
 
 class UpdateNet {
 public:
-    /// Loads an ONNX export. Throws Error when the file is missing or not a
-    /// net of 1 x 64 x 64 -> 6 + `expressions` outputs.
-    UpdateNet(const std::string& onnxPath, int patchSize, int expressions);
+    /// A net from an ONNX file's bytes; `what` names it in errors. Throws
+    /// Error when it does not load or is not a net of 1 x size x size -> 6 +
+    /// `expressions` outputs.
+    UpdateNet(const std::string& onnx, int patchSize, int expressions, const std::string& what);
 
     int expressionCount() const { return expressions_; }
 
@@ -38,6 +39,7 @@ private:
     cv::dnn::Net net_;
     int size_, expressions_;
     cv::Mat input_;
+    std::vector<cv::Mat> outputs_;
     Eigen::VectorXd update_;
 };
 
@@ -47,9 +49,17 @@ Eigen::VectorXd updateBetween(const WarpLayout& layout, const fit::FaceParams& s
 /// params <- the update applied: R(dw) R, c + z(c) dc, b + db clamped to [0, 1].
 void applyUpdate(const WarpLayout& layout, const Eigen::VectorXd& update, fit::FaceParams& params);
 
-/// `iterations` rounds of warp at params, predict, apply (the same net each
-/// round: a stage trained on its own residuals' range converges by repeating).
-void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera,
-            const Eigen::VectorXd& identity, fit::FaceParams& params, int iterations, cv::Mat& patch);
+/// What one face's refinement reuses from frame to frame.
+struct RefineWork {
+    Eigen::Matrix3Xd identity_shape;  ///< fit::shapeWithIdentity of the anchors
+    Eigen::Matrix3Xd anchors3d;
+    Eigen::Matrix2Xd anchors;
+    cv::Mat patch;
+};
+
+/// `rounds` rounds of: warp at params, predict, apply (a stage trained on its
+/// own residuals' range converges by repeating). work.identity_shape must be set.
+void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
+            int rounds, RefineWork& work);
 
 }  // namespace facetrack::cnn

@@ -71,4 +71,11 @@ HeadPose headPoseOf(const FaceParams& params) {
     return headPoseOf(Eigen::Quaterniond(rotationOf(params.omega()) * modelToFrontal()), params.translation() * 10.0);
 }
 
+void poseParamsOf(const HeadPose& pose, FaceParams& params) {
+    const Eigen::Quaterniond q(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+    const Eigen::AngleAxisd r(q.normalized().toRotationMatrix() * modelToFrontal().transpose());
+    params.pose.head<3>() = r.angle() * r.axis();
+    params.pose.tail<3>() = Eigen::Vector3d(pose.translation_mm.x, pose.translation_mm.y, pose.translation_mm.z) / 10.0;
+}
+
 }  // namespace facetrack::fit

@@ -31,6 +31,9 @@ Eigen::Vector3d omegaFromEuler(const Eigen::Vector3d& eulerDeg);
 /// The public pose of a fitted face.
 HeadPose headPoseOf(const FaceParams& params);
 
+/// The inverse: the pose part of params (omega, t) of a public pose; expressions untouched.
+void poseParamsOf(const HeadPose& pose, FaceParams& params);
+
 /// The public pose of a rotation x_camera = q x_model (a unit quaternion, R_0
 /// included) and a translation in mm.
 HeadPose headPoseOf(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& translationMm);

@@ -1,5 +1,6 @@
 #include "facetrack/tracker.hpp"
 
+#include "cnn/cnn_stage.hpp"
 #include "core/environment.hpp"
 #include "facetrack/error.hpp"
 #include "filter/filter_stage.hpp"
@@ -28,6 +29,12 @@ Models Models::loadDefault() {
         models.eyes = EyeModel::load(eyes);
     } else {
         core::log("eye model " + eyes + " not found: the gaze stage is not available");
+    }
+    const std::string cnn = CnnModel::defaultPath();
+    if (std::filesystem::exists(cnn, ec)) {
+        models.cnn = CnnModel::load(cnn);
+    } else {
+        core::log("CNN cascade " + cnn + " not found: the cnn stage is not available");
     }
     return models;
 }
@@ -58,7 +65,7 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
     pipeline::StageList stages;
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind()));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}, models.landmarks != nullptr));
-    stages.push_back(pipeline::notAvailable("cnn", "the CNN refinement cascade is not built yet"));
+    stages.push_back(cnn::makeCnnStage(models.cnn, models.face, models.landmarks != nullptr));
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
     // The gaze stage's eye shapes have their own temporal estimate: the filter leaves them as they are.
     const pipeline::Stage& gazeStage = *stages.back();

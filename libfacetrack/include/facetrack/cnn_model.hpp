@@ -1,0 +1,47 @@
+#pragma once
+/// \file
+/// The CNN cascade of the "cnn" stage (thesis 4.4): small nets that regress,
+/// from the face texture warped into a canonical patch at the current pose and
+/// expression, the update to both. Trained by tools/train_cnn on the dense
+/// teacher labels (MediaPipe's mesh fitted with the face model; docs/cnn.md).
+///
+/// Like the other models it is data: load it once, it is immutable, share it
+/// (by shared_ptr) between any number of Trackers on any threads.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace facetrack {
+
+namespace cnn {
+struct CnnModelData;
+}
+
+class CnnModel {
+public:
+    /// Throws facetrack::Error naming the file when it is missing, truncated,
+    /// corrupt or of another format version.
+    static std::shared_ptr<const CnnModel> load(const std::string& path);
+    /// cnn_cascade.ftm in modelDirectory().
+    static std::string defaultPath();
+    static std::uint32_t formatVersion();
+
+    const std::string& sourcePath() const;
+    /// What it was trained on, as the packer wrote it.
+    const std::string& provenance() const;
+    /// Per stage, how many rounds it runs.
+    std::vector<int> rounds() const;
+
+    /// Internal representation, for facetrack's own stages.
+    const cnn::CnnModelData& data() const { return *data_; }
+
+    CnnModel(std::shared_ptr<const cnn::CnnModelData> data, std::string source);
+
+private:
+    std::shared_ptr<const cnn::CnnModelData> data_;
+    std::string source_;
+};
+
+}  // namespace facetrack

@@ -1,0 +1,86 @@
+#include "facetrack/cnn_model.hpp"
+
+#include "cnn/cnn_model_data.hpp"
+#include "core/binary_io.hpp"
+#include "facetrack/version.hpp"
+
+namespace facetrack {
+
+namespace cnn {
+
+namespace {
+constexpr int kMaxStages = 8, kMaxRounds = 8;
+
+void validate(const CnnModelData& m, const std::string& what) {
+    if (m.patch_size < 16 || m.patch_size > 256) throw Error(what + ": corrupt: patch size");
+    if (m.stages.empty() || m.stages.size() > kMaxStages) throw Error(what + ": corrupt: stage count");
+    for (const auto& s : m.stages) {
+        if (s.rounds < 1 || s.rounds > kMaxRounds || s.onnx.empty()) throw Error(what + ": corrupt: a stage");
+    }
+}
+}  // namespace
+
+void writeCnnModel(const std::string& path, const CnnModelData& m) {
+    validate(m, "CNN cascade for '" + path + "'");
+    core::BinaryWriter w;
+    w.put<std::int32_t>(m.patch_size);
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(m.expressions.size()));
+    for (const auto& name : m.expressions) w.putString(name);
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(m.stages.size()));
+    for (const auto& s : m.stages) {
+        w.put<std::int32_t>(s.rounds);
+        w.putString(s.onnx);
+    }
+    w.putString(m.provenance);
+    core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
+}
+
+CnnModelData readCnnModel(const std::string& path) {
+    const std::string what = "CNN cascade '" + path + "'";
+    const std::string payload = core::readModelFile(path, kCnnModelMagic, kCnnModelVersion, "CNN cascade");
+    core::BinaryReader r(payload, what);
+    CnnModelData m;
+    m.patch_size = r.get<std::int32_t>();
+    const auto names = r.get<std::uint32_t>();
+    if (names > 1000) r.fail("expression count");
+    for (std::uint32_t i = 0; i < names; ++i) m.expressions.push_back(r.getString());
+    const auto stages = r.get<std::uint32_t>();
+    if (stages > kMaxStages) r.fail("stage count");
+    for (std::uint32_t i = 0; i < stages; ++i) {
+        CnnStageData s;
+        s.rounds = r.get<std::int32_t>();
+        s.onnx = r.getString();
+        m.stages.push_back(std::move(s));
+    }
+    m.provenance = r.getString();
+    r.expectEnd();
+    validate(m, what);
+    return m;
+}
+
+}  // namespace cnn
+
+CnnModel::CnnModel(std::shared_ptr<const cnn::CnnModelData> data, std::string source)
+    : data_(std::move(data)), source_(std::move(source)) {
+    if (!data_) throw Error("CnnModel: null model data");
+}
+
+std::shared_ptr<const CnnModel> CnnModel::load(const std::string& path) {
+    return std::make_shared<const CnnModel>(std::make_shared<const cnn::CnnModelData>(cnn::readCnnModel(path)), path);
+}
+
+std::string CnnModel::defaultPath() { return modelDirectory() + "/cnn_cascade.ftm"; }
+
+std::uint32_t CnnModel::formatVersion() { return cnn::kCnnModelVersion; }
+
+const std::string& CnnModel::sourcePath() const { return source_; }
+
+const std::string& CnnModel::provenance() const { return data_->provenance; }
+
+std::vector<int> CnnModel::rounds() const {
+    std::vector<int> r;
+    for (const auto& s : data_->stages) r.push_back(s.rounds);
+    return r;
+}
+
+}  // namespace facetrack

@@ -1,0 +1,113 @@
+#include "cnn/cnn_stage.hpp"
+
+#include "cnn/cnn_model_data.hpp"
+#include "cnn/update_net.hpp"
+#include "facetrack/error.hpp"
+#include "fit/fit_basis.hpp"
+
+#include <algorithm>
+
+namespace facetrack::cnn {
+
+namespace {
+
+std::vector<int> expressionIndices(const FaceModel& face, const std::vector<std::string>& names) {
+    const auto& all = face.expressionNames();
+    std::vector<int> indices;
+    for (const auto& name : names) {
+        const auto it = std::find(all.begin(), all.end(), name);
+        if (it == all.end()) throw Error("CNN cascade: the face model has no expression '" + name + "'");
+        indices.push_back(static_cast<int>(it - all.begin()));
+    }
+    return indices;
+}
+
+struct CnnFaceState final : pipeline::StageState {
+    fit::FaceParams params;
+    std::vector<float> identity;  ///< the identity work.identity_shape is of
+    bool shaped = false;
+    RefineWork work;
+};
+
+class CnnStage final : public pipeline::Stage {
+public:
+    CnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face)
+        : cascade_(std::move(cascade)), face_(std::move(face)) {
+        const CnnModelData& d = cascade_->data();
+        layout_ = makeWarpLayout(face_->data(), expressionIndices(*face_, d.expressions), d.patch_size);
+        for (std::size_t i = 0; i < d.stages.size(); ++i) {
+            nets_.emplace_back(d.stages[i].onnx, d.patch_size, static_cast<int>(d.expressions.size()),
+                               "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1));
+        }
+    }
+
+    StageInfo info() const override {
+        std::string rounds;
+        for (const int r : cascade_->rounds()) {
+            if (!rounds.empty()) rounds += '+';
+            rounds += std::to_string(r);
+        }
+        return {"cnn", true,
+                std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
+                    std::to_string(layout_.anchors.expressions.size()) + " expressions (" + cascade_->sourcePath() + ")"};
+    }
+
+    std::unique_ptr<pipeline::StageState> newFaceState() const override {
+        auto s = std::make_unique<CnnFaceState>();
+        s->params.expression = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(layout_.anchors.expressions.size()));
+        s->identity.reserve(static_cast<std::size_t>(face_->identityCount()));
+        return s;
+    }
+
+    std::vector<int> estimatedExpressions() const override { return layout_.anchors.expressions; }
+
+    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        auto& s = static_cast<CnnFaceState&>(*state);
+        FaceResult& r = face.result;
+        if (!r.pose || !r.expression) return true;  // nothing fitted to refine
+        if (!s.shaped || s.identity != r.identity) {
+            s.identity = r.identity;
+            Eigen::VectorXd a = Eigen::VectorXd::Zero(layout_.anchors.identityCount());
+            for (std::size_t k = 0; k < s.identity.size() && k < static_cast<std::size_t>(a.size()); ++k) a[static_cast<Eigen::Index>(k)] = s.identity[k];
+            s.work.identity_shape = fit::shapeWithIdentity(layout_.anchors, a);
+            s.shaped = true;
+        }
+        readParams(*r.pose, r.expression->native, s.params);
+        const auto& stages = cascade_->data().stages;
+        for (std::size_t i = 0; i < nets_.size(); ++i) refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work);
+        if (!s.params.pose.allFinite()) return true;  // keep the fit's answer
+        r.pose = fit::headPoseOf(s.params);
+        std::vector<float>& native = r.expression->native;
+        for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
+            native[static_cast<std::size_t>(layout_.anchors.expressions[k])] = static_cast<float>(s.params.expression[static_cast<Eigen::Index>(k)]);
+        }
+        r.expression->arkit = face_->toArkit(native);
+        return true;
+    }
+
+private:
+    /// The fit's public pose and weights as the cascade's parameters.
+    void readParams(const HeadPose& pose, const std::vector<float>& native, fit::FaceParams& p) const {
+        fit::poseParamsOf(pose, p);
+        for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
+            const auto j = static_cast<std::size_t>(layout_.anchors.expressions[k]);
+            p.expression[static_cast<Eigen::Index>(k)] = j < native.size() ? native[j] : 0.0;
+        }
+    }
+
+    std::shared_ptr<const CnnModel> cascade_;
+    std::shared_ptr<const FaceModel> face_;
+    WarpLayout layout_;
+    std::vector<UpdateNet> nets_;
+};
+
+}  // namespace
+
+std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face,
+                                              bool haveFit) {
+    if (!cascade) return pipeline::notAvailable("cnn", "no CNN cascade (" + CnnModel::defaultPath() + " not found)");
+    if (!haveFit) return pipeline::notAvailable("cnn", "needs the fit stage's pose and expressions");
+    return std::make_unique<CnnStage>(std::move(cascade), std::move(face));
+}
+
+}  // namespace facetrack::cnn

@@ -1,0 +1,89 @@
+// pack_cnn: the CNN cascade's model file (facetrack/cnn_model.hpp) from the
+// ONNX exports of tools/train_cnn/train_stage.py (issue 17, docs/cnn.md).
+//
+//   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] --out build/cnn/cascade.ftm
+//                        [--provenance "..."]
+//
+// Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
+// the update outputs cnn/update_net.hpp defines, with the labelled expressions
+// of the dense teacher labels in the face model's names; every net is run once
+// here to check it loads in OpenCV's dnn and gives that many outputs.
+
+#include "app/args.hpp"
+#include "app/tool_main.hpp"
+#include "cnn/cnn_model_data.hpp"
+#include "cnn/update_net.hpp"
+#include "facetrack/face_model.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+using namespace facetrack;
+
+namespace {
+
+std::vector<std::string> split(const std::string& list) {
+    std::vector<std::string> out;
+    std::stringstream s(list);
+    for (std::string item; std::getline(s, item, ',');) out.push_back(item);
+    return out;
+}
+
+std::string readBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot read '" + path + "'");
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// The expression names of a net's columns file: the lines after the six pose outputs.
+std::vector<std::string> expressionColumns(const std::string& onnxPath) {
+    const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + ".columns.txt";
+    std::stringstream lines(readBytes(path));
+    std::vector<std::string> names;
+    for (std::string line; std::getline(lines, line);) if (!line.empty()) names.push_back(line);
+    const std::vector<std::string> pose = {"omega_x", "omega_y", "omega_z", "centre_x", "centre_y", "centre_z"};
+    if (names.size() < pose.size() || !std::equal(pose.begin(), pose.end(), names.begin())) {
+        throw Error(path + ": expected the update's six pose outputs (" + pose.front() + " ... " + pose.back() + ") first");
+    }
+    return {names.begin() + static_cast<std::ptrdiff_t>(pose.size()), names.end()};
+}
+
+int run(int argc, char** argv) {
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--out", "--provenance"}, {"--help"});
+    if (args.has("--help") || !args.has("--nets") || !args.has("--out")) {
+        std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] --out FILE.ftm [--provenance TEXT]");
+        return args.has("--help") ? 0 : 2;
+    }
+    const auto nets = split(args.get("--nets"));
+    auto rounds = split(args.get("--rounds", ""));
+    if (rounds.empty()) rounds.assign(nets.size(), "1");
+    if (rounds.size() != nets.size()) throw Error("--rounds needs one count per net");
+
+    const auto face = FaceModel::loadDefault();
+    cnn::CnnModelData model;
+    model.provenance = args.get("--provenance", "");
+    for (std::size_t i = 0; i < nets.size(); ++i) {
+        const auto names = expressionColumns(nets[i]);
+        if (i == 0) model.expressions = names;
+        if (names != model.expressions) throw Error(nets[i] + ": its expressions differ from the first net's");
+        for (const auto& n : names) {
+            const auto& all = face->expressionNames();
+            if (std::find(all.begin(), all.end(), n) == all.end()) throw Error(nets[i] + ": the face model has no expression '" + n + "'");
+        }
+        cnn::CnnStageData stage;
+        stage.rounds = std::stoi(rounds[i]);
+        stage.onnx = readBytes(nets[i]);
+        cnn::UpdateNet check(stage.onnx, model.patch_size, static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
+        model.stages.push_back(std::move(stage));
+        std::printf("stage %zu: %s, %d round(s), %zu bytes\n", i + 1, nets[i].c_str(), model.stages.back().rounds, model.stages.back().onnx.size());
+    }
+    cnn::writeCnnModel(args.get("--out"), model);
+    std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return tools::runTool("pack_cnn", run, argc, argv); }
