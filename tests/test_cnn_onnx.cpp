@@ -5,6 +5,8 @@
 #include "cnn/cnn_model_data.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/error.hpp"
+#include "facetrack/face_model.hpp"
+#include "fit/face_fitter.hpp"
 #include "facetrack/tracker.hpp"
 #include "test_support.hpp"
 
@@ -87,6 +89,27 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     cnn::CnnModelData none = m;
     none.stages.clear();
     EXPECT_THROW(cnn::writeCnnModel(test::tempPath("empty.ftm"), none), Error);
+}
+
+TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
+    const auto face = FaceModel::load(test::shippedFaceModel());
+    const auto& names = face->expressionNames();
+    const int jawOpen = static_cast<int>(std::find(names.begin(), names.end(), "jawOpen") - names.begin());
+    const cnn::WarpLayout layout = cnn::makeWarpLayout(face->data(), {jawOpen});
+    cnn::UpdateNet net(parityCascade().stages[0].onnx, 64, 1, "parity");
+    cnn::RefineWork work;
+    work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
+    const cv::Mat grey(480, 640, CV_8UC1, cv::Scalar(90));
+    const fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    fit::FaceParams params;
+    params.expression = Eigen::VectorXd::Zero(1);
+    params.pose[5] = 50.0;
+    EXPECT_TRUE(cnn::refine(layout, net, grey, camera, params, 2, work));
+    EXPECT_TRUE(params.pose.allFinite());
+    params.pose.tail<3>() << 0.0, 0.0, -40.0;  // behind the camera
+    EXPECT_FALSE(cnn::refine(layout, net, grey, camera, params, 2, work));
+    params.pose[0] = std::nan("");
+    EXPECT_FALSE(cnn::refine(layout, net, grey, camera, params, 1, work));
 }
 
 TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {

@@ -74,8 +74,9 @@ public:
         }
         readParams(*r.pose, r.expression->native, s.params);
         const auto& stages = cascade_->data().stages;
-        for (std::size_t i = 0; i < nets_.size(); ++i) refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work);
-        if (!s.params.pose.allFinite()) return true;  // keep the fit's answer
+        for (std::size_t i = 0; i < nets_.size(); ++i) {
+            if (!refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work)) return true;  // keep the fit's answer
+        }
         r.pose = fit::headPoseOf(s.params);
         std::vector<float>& native = r.expression->native;
         for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {

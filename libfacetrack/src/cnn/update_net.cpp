@@ -70,13 +70,17 @@ void applyUpdate(const WarpLayout& layout, const Eigen::VectorXd& update, fit::F
     for (Eigen::Index k = 0; k < n; ++k) params.expression[k] = std::clamp(params.expression[k] + update[6 + k], 0.0, 1.0);
 }
 
-void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
+bool refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
             int rounds, RefineWork& work) {
+    constexpr double kMinDepthCm = 1.0;
     for (int i = 0; i < rounds; ++i) {
+        if (!params.pose.allFinite() || centreOf(layout, params).z() < kMinDepthCm) return false;
         projectAnchors(layout, work.identity_shape, camera, params, work.anchors3d, work.anchors);
+        if (!work.anchors.allFinite()) return false;
         warpFace(layout, grey, work.anchors, work.patch);
         applyUpdate(layout, net.predict(work.patch), params);
     }
+    return params.pose.allFinite() && centreOf(layout, params).z() >= kMinDepthCm;
 }
 
 }  // namespace facetrack::cnn

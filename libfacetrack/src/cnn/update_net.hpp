@@ -59,7 +59,9 @@ struct RefineWork {
 
 /// `rounds` rounds of: warp at params, predict, apply (a stage trained on its
 /// own residuals' range converges by repeating). work.identity_shape must be set.
-void refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
+/// False (params then meaningless) when the face left the space in front of the
+/// camera or a value stopped being finite.
+bool refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
             int rounds, RefineWork& work);
 
 }  // namespace facetrack::cnn
