@@ -47,6 +47,10 @@ struct RoundErrors {
 };
 
 void report(const char* name, RoundErrors e) {
+    if (e.rotation_deg.empty()) {
+        std::printf("%-8s no faces\n", name);
+        return;
+    }
     const auto mean = [](const std::vector<double>& v) {
         double s = 0;
         for (double x : v) s += x;
@@ -76,12 +80,7 @@ int run(int argc, char** argv) {
     const auto model = FaceModel::load(FaceModel::defaultPath());
     const auto cascade = CnnModel::load(args.get("--cascade", CnnModel::defaultPath()));
     const cnn::CnnModelData& data = cascade->data();
-    std::vector<int> expressionIds;
-    for (const auto& name : data.expressions) {
-        const auto& all = model->expressionNames();
-        expressionIds.push_back(static_cast<int>(std::find(all.begin(), all.end(), name) - all.begin()));
-        if (expressionIds.back() == static_cast<int>(all.size())) throw Error("the face model has no expression '" + name + "'");
-    }
+    const std::vector<int> expressionIds = cnn::expressionIndices(model->expressionNames(), data.expressions);
     const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), expressionIds, data.patch_size);
     std::vector<cnn::UpdateNet> nets;
     std::vector<std::size_t> roundNet;  // per round, its stage

@@ -68,10 +68,7 @@ int run(int argc, char** argv) {
         const auto names = expressionColumns(nets[i]);
         if (i == 0) model.expressions = names;
         if (names != model.expressions) throw Error(nets[i] + ": its expressions differ from the first net's");
-        for (const auto& n : names) {
-            const auto& all = face->expressionNames();
-            if (std::find(all.begin(), all.end(), n) == all.end()) throw Error(nets[i] + ": the face model has no expression '" + n + "'");
-        }
+        cnn::expressionIndices(face->expressionNames(), names);  // every name is the face model's, or it throws
         cnn::CnnStageData stage;
         stage.rounds = std::stoi(rounds[i]);
         stage.onnx = readBytes(nets[i]);

@@ -4,6 +4,8 @@
 #include "core/binary_io.hpp"
 #include "facetrack/version.hpp"
 
+#include <algorithm>
+
 namespace facetrack {
 
 namespace cnn {
@@ -19,6 +21,16 @@ void validate(const CnnModelData& m, const std::string& what) {
     }
 }
 }  // namespace
+
+std::vector<int> expressionIndices(const std::vector<std::string>& modelNames, const std::vector<std::string>& names) {
+    std::vector<int> indices;
+    for (const auto& name : names) {
+        const auto it = std::find(modelNames.begin(), modelNames.end(), name);
+        if (it == modelNames.end()) throw Error("CNN cascade: the face model has no expression '" + name + "'");
+        indices.push_back(static_cast<int>(it - modelNames.begin()));
+    }
+    return indices;
+}
 
 void writeCnnModel(const std::string& path, const CnnModelData& m) {
     validate(m, "CNN cascade for '" + path + "'");

@@ -24,6 +24,9 @@ constexpr char kCnnModelMagic[] = "FTCNNCAS";
 constexpr std::uint32_t kCnnModelVersion = 1;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
+
+/// Indices into FaceModel::expressionNames() of `names`; throws Error naming one the model lacks.
+std::vector<int> expressionIndices(const std::vector<std::string>& modelNames, const std::vector<std::string>& names);
 /// Throws Error naming the file when it is missing, truncated or corrupt.
 CnnModelData readCnnModel(const std::string& path);
 

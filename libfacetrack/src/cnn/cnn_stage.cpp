@@ -11,17 +11,6 @@ namespace facetrack::cnn {
 
 namespace {
 
-std::vector<int> expressionIndices(const FaceModel& face, const std::vector<std::string>& names) {
-    const auto& all = face.expressionNames();
-    std::vector<int> indices;
-    for (const auto& name : names) {
-        const auto it = std::find(all.begin(), all.end(), name);
-        if (it == all.end()) throw Error("CNN cascade: the face model has no expression '" + name + "'");
-        indices.push_back(static_cast<int>(it - all.begin()));
-    }
-    return indices;
-}
-
 struct CnnFaceState final : pipeline::StageState {
     fit::FaceParams params;
     std::vector<float> identity;  ///< the identity work.identity_shape is of
@@ -34,7 +23,7 @@ public:
     CnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face)
         : cascade_(std::move(cascade)), face_(std::move(face)) {
         const CnnModelData& d = cascade_->data();
-        layout_ = makeWarpLayout(face_->data(), expressionIndices(*face_, d.expressions), d.patch_size);
+        layout_ = makeWarpLayout(face_->data(), expressionIndices(face_->expressionNames(), d.expressions), d.patch_size);
         for (std::size_t i = 0; i < d.stages.size(); ++i) {
             nets_.emplace_back(d.stages[i].onnx, d.patch_size, static_cast<int>(d.expressions.size()),
                                "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1));
