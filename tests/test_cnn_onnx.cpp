@@ -1,8 +1,9 @@
 // The CNN export path (tools/train_cnn, docs/cnn.md): a net exported by train_stage.py's export()
 // loads in OpenCV's dnn and gives torch's outputs (fixture: tools/train_cnn/make_parity_fixture.py);
-// the cascade's file format; the cnn stage wired into the Tracker.
+// the cascade's file format; the landmark net's geometry; the cnn stage wired into the Tracker.
 
 #include "cnn/cnn_model_data.hpp"
+#include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
@@ -57,6 +58,12 @@ cnn::CnnModelData parityCascade() {
     return m;
 }
 
+std::string fixtureBytes(const std::string& name) {
+    std::ifstream in(test::sourceDir() + "/tests/data/" + name, std::ios::binary);
+    EXPECT_TRUE(in) << name;
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     const cnn::CnnModelData m = parityCascade();
     const std::string path = test::tempPath("cascade.ftm");
@@ -66,6 +73,14 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     ASSERT_EQ(loaded->rounds(), std::vector<int>{2});
     EXPECT_EQ(loaded->data().stages[0].onnx, m.stages[0].onnx);
     EXPECT_EQ(loaded->provenance(), m.provenance);
+    EXPECT_FALSE(loaded->hasLandmarkNet());
+    cnn::CnnModelData withLandmarks = m;
+    withLandmarks.landmark_net = fixtureBytes("cnn_landmarks_fixture.onnx");
+    cnn::writeCnnModel(test::tempPath("cascade_landmarks.ftm"), withLandmarks);
+    const auto reloaded = CnnModel::load(test::tempPath("cascade_landmarks.ftm"));
+    EXPECT_TRUE(reloaded->hasLandmarkNet());
+    EXPECT_EQ(reloaded->data().landmark_net, withLandmarks.landmark_net);
+    EXPECT_THROW(cnn::PatchNet(withLandmarks.landmark_net, 64, 6 + 1, "landmark net"), Error);
     {
         std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
         f.seekp(200);
@@ -80,15 +95,42 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     EXPECT_THROW(CnnModel::load(test::tempPath("no_such_cascade.ftm")), Error);
     // A net of another output count, or not a net, is refused with its name.
     try {
-        cnn::UpdateNet(m.stages[0].onnx, 64, 2, "stage 1");
+        cnn::PatchNet(m.stages[0].onnx, 64, 6 + 2, "stage 1");
         ADD_FAILURE() << "a 7-output net passed for 6 + 2";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("stage 1 gives 7 outputs"), std::string::npos) << e.what();
     }
-    EXPECT_THROW(cnn::UpdateNet("not an onnx file", 64, 1, "stage 1"), Error);
+    EXPECT_THROW(cnn::PatchNet("not an onnx file", 64, 6 + 1, "stage 1"), Error);
     cnn::CnnModelData none = m;
     none.stages.clear();
     EXPECT_THROW(cnn::writeCnnModel(test::tempPath("empty.ftm"), none), Error);
+}
+
+TEST(CnnLandmarks, DisplacementsAreInPatchPixelsWhateverTheFacesPlaceSizeAndRoll) {
+    const auto face = FaceModel::load(test::shippedFaceModel());
+    const cnn::WarpLayout layout = cnn::makeWarpLayout(face->data(), {});
+    const fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    fit::FaceParams params;
+    // The face centre (WarpLayout::centre, ahead of the model origin) at 60 cm, then at 30 cm.
+    params.pose.tail<3>() = Eigen::Vector3d(2.0, -1.0, 60.0) - layout.centre;
+    const Eigen::Matrix2d far = cnn::patchToFrame(layout, cnn::projectAnchors(layout, Eigen::VectorXd(), camera, params));
+    params.pose.tail<3>() = Eigen::Vector3d(1.0, -0.5, 30.0) - layout.centre;
+    const Eigen::Matrix2d near = cnn::patchToFrame(layout, cnn::projectAnchors(layout, Eigen::VectorXd(), camera, params));
+    EXPECT_NEAR(near.determinant() / far.determinant(), 4.0, 0.2);  // twice the size: four times the area
+    EXPECT_NEAR(far(0, 1), 0.0, 0.02 * far(0, 0));  // upright: no shear or turn
+    params.pose.head<3>() = fit::omegaFromEuler(Eigen::Vector3d(0.0, 0.0, 30.0));
+    const Eigen::Matrix2d rolled = cnn::patchToFrame(layout, cnn::projectAnchors(layout, Eigen::VectorXd(), camera, params));
+    EXPECT_NEAR(std::abs(std::atan2(rolled(1, 0), rolled(0, 0))) * 180.0 / M_PI, 30.0, 1.0);
+    EXPECT_NEAR(rolled.determinant(), near.determinant(), 0.05 * near.determinant());
+    // Out and back.
+    fit::Landmarks2d p = fit::Landmarks2d::Random() * 100.0;
+    Eigen::VectorXd d = Eigen::VectorXd::Random(cnn::kLandmarkOutputs) * 5.0;
+    EXPECT_LT((cnn::displacementsOf(rolled, p, cnn::displaced(rolled, p, d)) - d).cwiseAbs().maxCoeff(), 1e-9);
+    // A displacement along the patch's x moves a point along the face's rolled x axis.
+    d.setZero();
+    d[0] = 1.0;
+    const Eigen::Vector2d moved = cnn::displaced(rolled, p, d).col(0) - p.col(0);
+    EXPECT_NEAR(std::abs(std::atan2(moved.y(), moved.x())) * 180.0 / M_PI, 30.0, 1.0);
 }
 
 TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
@@ -96,7 +138,7 @@ TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
     const auto& names = face->expressionNames();
     const int jawOpen = static_cast<int>(std::find(names.begin(), names.end(), "jawOpen") - names.begin());
     const cnn::WarpLayout layout = cnn::makeWarpLayout(face->data(), {jawOpen});
-    cnn::UpdateNet net(parityCascade().stages[0].onnx, 64, 1, "parity");
+    cnn::PatchNet net(parityCascade().stages[0].onnx, 64, 6 + 1, "parity");
     cnn::RefineWork work;
     work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
     const cv::Mat grey(480, 640, CV_8UC1, cv::Scalar(90));
@@ -151,6 +193,61 @@ TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
     EXPECT_GE(differ, 5);
     const auto timing = std::find_if(b.timings.begin(), b.timings.end(), [](const StageTiming& t) { return t.stage == "cnn"; });
     EXPECT_NE(timing, b.timings.end());
+}
+
+TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
+    FACETRACK_REQUIRE_SHARED();
+    // The fixture's net displaces every point by (+3, 0) patch pixels: the stage's landmarks must be
+    // the projection of its own refined face, each moved by L (3, 0).
+    cnn::CnnModelData m = parityCascade();
+    m.landmark_net = fixtureBytes("cnn_landmarks_fixture.onnx");
+    const std::string path = test::tempPath("cascade_landmark_stage.ftm");
+    cnn::writeCnnModel(path, m);
+    Models models = Models::loadDefault();
+    models.eyes = nullptr;
+    models.cnn = CnnModel::load(path);
+    TrackerConfig config;
+    config.filter.enabled = false;
+    Tracker tracker(models, config);
+    const auto stages = tracker.stages();
+    const auto cnnStage = std::find_if(stages.begin(), stages.end(), [](const StageInfo& s) { return s.name == "cnn"; });
+    ASSERT_NE(cnnStage, stages.end());
+    EXPECT_NE(cnnStage->detail.find("landmark net"), std::string::npos) << cnnStage->detail;
+
+    const auto& names = models.face->expressionNames();
+    const int jawOpen = static_cast<int>(std::find(names.begin(), names.end(), "jawOpen") - names.begin());
+    const cnn::WarpLayout layout = cnn::makeWarpLayout(models.face->data(), {jawOpen});
+    const fit::FitBasis basis = cnn::landmarkBasis(*models.face, {jawOpen});
+    const auto frames = test::clipFrames(6);
+    FrameResult out;
+    int checked = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const ImageView view{frames[i].data, frames[i].cols, frames[i].rows, frames[i].step, PixelFormat::Bgr8};
+        tracker.process(view, 0.04 * static_cast<double>(i), out);
+        if (out.faces.empty()) continue;
+        const FaceResult& r = out.faces[0];
+        ASSERT_TRUE(r.landmarks && r.pose && r.expression);
+        fit::FaceParams params;
+        fit::poseParamsOf(*r.pose, params);
+        params.expression = Eigen::VectorXd::Constant(1, r.expression->native[static_cast<std::size_t>(jawOpen)]);
+        Eigen::VectorXd identity = Eigen::VectorXd::Zero(basis.identityCount());
+        for (std::size_t k = 0; k < r.identity.size(); ++k) identity[static_cast<Eigen::Index>(k)] = r.identity[k];
+        const fit::Camera camera = fit::cameraFor(view.width, view.height, 60.0, 0.0);
+        const Eigen::Matrix2d toFrame = cnn::patchToFrame(layout, cnn::projectAnchors(layout, identity, camera, params));
+        Eigen::Matrix3Xd slots;
+        const fit::Landmarks2d projected = cnn::projectedLandmarks(basis, fit::shapeWithIdentity(basis, identity), camera, params, slots);
+        const Eigen::Vector2d shift = toFrame * Eigen::Vector2d(3.0, 0.0);
+        EXPECT_GT(shift.x(), 3.0);  // a patch pixel is more than a frame pixel on this clip's face
+        double worst = 0.0;
+        for (int k = 0; k < 68; ++k) {
+            const Eigen::Vector2d got((*r.landmarks)[static_cast<std::size_t>(k)].x, (*r.landmarks)[static_cast<std::size_t>(k)].y);
+            worst = std::max(worst, (got - projected.col(k) - shift).norm());
+        }
+        EXPECT_LT(worst, 0.1) << "frame " << i;  // the public pose is rounded to floats
+        EXPECT_LE(r.box.x0, (*r.landmarks)[0].x);
+        ++checked;
+    }
+    EXPECT_GE(checked, 4);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "commands.hpp"
 #include "json.hpp"
 #include "common/faces300w.hpp"
+#include "still_landmarks.hpp"
 
 #include "app/image_view.hpp"
 #include "core/pts.hpp"
@@ -26,11 +27,16 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
-                                [--facemark FILE] [--dlib FILE|none] [--plot ced.png] [--max-error 0.08]
+                                [--cascade FILE] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
+                                [--plot ced.png] [--max-error 0.08]
 Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
 YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
 root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
 Methods, side by side with the same boxes:
+  facetrack LBF + fit + CNN  what the tracker reports: LBF, the fit, the CNN cascade and its
+                           landmark net (--cascade, default: the shipped cnn_cascade.ftm when it
+                           has one; --lbf-only leaves it out); a face whose fit does not hold
+                           keeps LBF's landmarks (counted as "dropped")
   facetrack LBF            --model (default: the shipped landmarks_lbf.ftm)
   OpenCV FacemarkLBF       --facemark FILE, a model trained by tools' train_facemark
   dlib shape_predictor     --dlib FILE (default /usr/share/dlib/shape_predictor_68_face_landmarks.dat)
@@ -97,7 +103,7 @@ Method dlibShapePredictor(const std::string& path, bool seenInTraining) {
 }  // namespace
 
 int runEvalLandmarks(const std::vector<std::string>& argv) {
-    const Args args(argv, {"--split", "--model", "--facemark", "--dlib", "--plot", "--max-error", "--yunet"}, {"--help"});
+    const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet"}, {"--help", "--lbf-only"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -109,7 +115,20 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
                                            : tools::listAnnotated(dir);
 
     std::vector<Method> methods;
-    methods.push_back(ourLbf(args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault()));
+    const auto lbf = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
+    auto pipeline = std::make_shared<StillLandmarks>(lbf, args.get("--cascade", ""), args.has("--lbf-only"));
+    int dropped = 0;
+    if (pipeline->usesPipeline()) {
+        methods.emplace_back(pipeline->method(), [pipeline, &dropped](const cv::Mat& bgr, const cv::Mat& gray, const Box& box) {
+            bool lost = false;
+            const Landmarks68 points = pipeline->of(bgr, gray, box, &lost);
+            dropped += lost;
+            Shape2 s(2, 68);
+            for (int i = 0; i < 68; ++i) s.col(i) = Eigen::Vector2f(points[static_cast<std::size_t>(i)].x, points[static_cast<std::size_t>(i)].y);
+            return s;
+        });
+    }
+    methods.push_back(ourLbf(lbf));
     if (args.has("--facemark")) methods.push_back(facemarkLbf(args.get("--facemark")));
     const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
     if (dlibPath != "none" && fs::exists(dlibPath)) {
@@ -149,6 +168,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     std::fputc('\n', stderr);
 
     std::printf("%zu faces, %d without a YuNet box (left out)\n", faces.size(), missed);
+    if (pipeline->usesPipeline()) std::printf("%s: %d faces dropped by the fit (LBF's landmarks kept)\n", pipeline->method().c_str(), dropped);
     std::printf("%-40s %6s %9s %9s %10s %9s %9s\n", "method", "faces", "mean NME", "median", "fail@8%", "AUC@8%", "ms/face");
     std::vector<CedCurve> curves;
     for (const auto& m : methods) {

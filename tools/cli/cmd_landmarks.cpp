@@ -4,7 +4,7 @@
 
 #include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"
-#include "landmarks/lbf.hpp"
+#include "still_landmarks.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -16,9 +16,13 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage = R"(usage: facetrack landmarks IMAGE|DIR|CLIP [--box x0,y0,x1,y1] [--model FILE]
+                           [--cascade FILE] [--lbf-only]
                            [--detector auto|yunet|cascade] [--yunet PATH] [--min-score S]
 68 landmarks (iBUG order, 0-based pixels) for each face, one JSON line per image or frame:
-  {"image": PATH, "frame": N, "faces": [{"box": [x0,y0,x1,y1], "score": s, "landmarks": [[x,y], ...]}]}
+  {"image": PATH, "frame": N, "method": M, "faces": [{"box": [x0,y0,x1,y1], "score": s, "landmarks": [[x,y], ...]}]}
+Each image or frame on its own. The landmarks are the tracker's: LBF, the fit, the CNN cascade
+and its landmark net (--cascade, default: the shipped cnn_cascade.ftm when it has one), or LBF's
+alone with --lbf-only or without such a cascade, and for a face whose fit does not hold; "method" says which.
 --box skips detection and starts from that box (drawn like YuNet's; score is null).
 --model defaults to landmarks_lbf.ftm in the model directory.)";
 
@@ -45,8 +49,8 @@ Box parseBox(const std::string& text) {
 
 int runLandmarks(const std::vector<std::string>& argv) {
     auto valued = kDetectorOptions;
-    valued.insert({"--box", "--model"});
-    const Args args(argv, valued, {"--help"});
+    valued.insert({"--box", "--model", "--cascade"});
+    const Args args(argv, valued, {"--help", "--lbf-only"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -57,7 +61,7 @@ int runLandmarks(const std::vector<std::string>& argv) {
     const auto model = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
     std::unique_ptr<FaceDetector> detector;
     if (!givenBox) detector = createFaceDetector(detectorConfig(args));
-    const std::string prior = detector ? detector->kind() : "yunet";
+    StillLandmarks still(model, args.get("--cascade", ""), args.has("--lbf-only"), detector ? detector->kind() : "yunet");
 
     MediaFrame frame;
     cv::Mat gray;
@@ -67,14 +71,17 @@ int runLandmarks(const std::vector<std::string>& argv) {
         if (givenBox) faces.push_back({*givenBox, 0.f});
         else faces = detector->detect(tools::viewOf(frame.bgr));
         Json list = Json::array();
+        bool anyDropped = false;
         for (const auto& face : faces) {
-            const auto shape = landmarks::alignLandmarks(model->data(), gray,
-                                                         landmarks::shapeFromBox(model->data(), face.box, prior));
+            bool dropped = false;
+            const Landmarks68 points = still.of(frame.bgr, gray, face.box, &dropped);
+            anyDropped |= dropped;
             list.push_back({{"box", boxJson(face.box)},
                             {"score", givenBox ? Json(nullptr) : Json(round2(face.score))},
-                            {"landmarks", landmarksJson(landmarks::toLandmarks68(shape))}});
+                            {"landmarks", landmarksJson(points)}});
         }
-        std::cout << Json{{"image", frame.source}, {"frame", frame.index}, {"faces", list}}.dump() << '\n';
+        const std::string method = anyDropped ? still.method() + " (LBF where the fit did not hold)" : still.method();
+        std::cout << Json{{"image", frame.source}, {"frame", frame.index}, {"method", method}, {"faces", list}}.dump() << '\n';
     }
     return 0;
 }

@@ -82,10 +82,10 @@ int run(int argc, char** argv) {
     const cnn::CnnModelData& data = cascade->data();
     const std::vector<int> expressionIds = cnn::expressionIndices(model->expressionNames(), data.expressions);
     const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), expressionIds, data.patch_size);
-    std::vector<cnn::UpdateNet> nets;
+    std::vector<cnn::PatchNet> nets;
     std::vector<std::size_t> roundNet;  // per round, its stage
     for (std::size_t i = 0; i < data.stages.size(); ++i) {
-        nets.emplace_back(data.stages[i].onnx, data.patch_size, static_cast<int>(data.expressions.size()), "stage " + std::to_string(i + 1));
+        nets.emplace_back(data.stages[i].onnx, data.patch_size, 6 + static_cast<int>(data.expressions.size()), "stage " + std::to_string(i + 1));
         roundNet.insert(roundNet.end(), static_cast<std::size_t>(data.stages[i].rounds), i);
     }
     const int iterations = static_cast<int>(roundNet.size());

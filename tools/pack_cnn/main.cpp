@@ -1,17 +1,20 @@
 // pack_cnn: the CNN cascade's model file (facetrack/cnn_model.hpp) from the
 // ONNX exports of tools/train_cnn/train_stage.py (issue 17, docs/cnn.md).
 //
-//   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] --out build/cnn/cascade.ftm
-//                        [--provenance "..."]
+//   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
+//                        --out build/cnn/cascade.ftm [--provenance "..."]
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
-// of the dense teacher labels in the face model's names; every net is run once
-// here to check it loads in OpenCV's dnn and gives that many outputs.
+// of the dense teacher labels in the face model's names, or for the landmark
+// net the 68 displacements of cnn/landmark_net.hpp (l_x0, l_y0, ..., l_y67);
+// every net is run once here to check it loads in OpenCV's dnn and gives that
+// many outputs.
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
 #include "cnn/cnn_model_data.hpp"
+#include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/face_model.hpp"
 
@@ -37,12 +40,21 @@ std::string readBytes(const std::string& path) {
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-/// The expression names of a net's columns file: the lines after the six pose outputs.
-std::vector<std::string> expressionColumns(const std::string& onnxPath) {
-    const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + ".columns.txt";
-    std::stringstream lines(readBytes(path));
+std::string columnsPath(const std::string& onnxPath) {
+    return onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + ".columns.txt";
+}
+
+std::vector<std::string> columns(const std::string& onnxPath) {
+    std::stringstream lines(readBytes(columnsPath(onnxPath)));
     std::vector<std::string> names;
     for (std::string line; std::getline(lines, line);) if (!line.empty()) names.push_back(line);
+    return names;
+}
+
+/// The expression names of a net's columns file: the lines after the six pose outputs.
+std::vector<std::string> expressionColumns(const std::string& onnxPath) {
+    const std::string path = columnsPath(onnxPath);
+    const std::vector<std::string> names = columns(onnxPath);
     const std::vector<std::string> pose = {"omega_x", "omega_y", "omega_z", "centre_x", "centre_y", "centre_z"};
     if (names.size() < pose.size() || !std::equal(pose.begin(), pose.end(), names.begin())) {
         throw Error(path + ": expected the update's six pose outputs (" + pose.front() + " ... " + pose.back() + ") first");
@@ -51,9 +63,9 @@ std::vector<std::string> expressionColumns(const std::string& onnxPath) {
 }
 
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--out", "--provenance"}, {"--help"});
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance"}, {"--help"});
     if (args.has("--help") || !args.has("--nets") || !args.has("--out")) {
-        std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] --out FILE.ftm [--provenance TEXT]");
+        std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] --out FILE.ftm [--provenance TEXT]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = split(args.get("--nets"));
@@ -72,9 +84,19 @@ int run(int argc, char** argv) {
         cnn::CnnStageData stage;
         stage.rounds = std::stoi(rounds[i]);
         stage.onnx = readBytes(nets[i]);
-        cnn::UpdateNet check(stage.onnx, model.patch_size, static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
+        cnn::PatchNet check(stage.onnx, model.patch_size, 6 + static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
         model.stages.push_back(std::move(stage));
         std::printf("stage %zu: %s, %d round(s), %zu bytes\n", i + 1, nets[i].c_str(), model.stages.back().rounds, model.stages.back().onnx.size());
+    }
+    if (args.has("--landmark-net")) {
+        const std::string path = args.get("--landmark-net");
+        std::vector<std::string> expected;
+        for (int i = 0; i < model::kLandmarkCount; ++i)
+            for (const char* axis : {"l_x", "l_y"}) expected.push_back(axis + std::to_string(i));
+        if (columns(path) != expected) throw Error(columnsPath(path) + ": expected the 68 landmark displacements l_x0, l_y0, ..., l_y67");
+        model.landmark_net = readBytes(path);
+        cnn::PatchNet check(model.landmark_net, model.patch_size, cnn::kLandmarkOutputs, path);
+        std::printf("landmark net: %s, %zu bytes\n", path.c_str(), model.landmark_net.size());
     }
     cnn::writeCnnModel(args.get("--out"), model);
     std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());

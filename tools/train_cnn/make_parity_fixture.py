@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """The cv::dnn parity test's fixture (tests/test_cnn_onnx.cpp): a narrow Stage net (train_stage.py's
 layers, random weights, seed 3, BatchNorm statistics set so folding matters), exported the same way,
-with three standardised inputs and torch's outputs as little-endian float32.
+with three standardised inputs and torch's outputs as little-endian float32; and a landmark net of
+the same layers whose 136 outputs are constant, every point displaced by (+3, 0) patch pixels
+(cnn_landmarks_fixture.onnx, for the stage's landmark geometry).
 
   /usr/bin/python3 tools/train_cnn/make_parity_fixture.py tests/data
 """
@@ -15,13 +17,21 @@ from train_stage import Stage, export  # noqa: E402
 
 out = sys.argv[1] if len(sys.argv) > 1 else "tests/data"
 torch.manual_seed(3)
+
+
+def randomise_batchnorm(net):
+    """Statistics that make folding matter (and keep the exporter from merging equal initializers
+    into Identity nodes, which OpenCV 4.6 does not load)."""
+    for m in net.modules():
+        if isinstance(m, torch.nn.BatchNorm2d):
+            m.running_mean.uniform_(-0.5, 0.5)
+            m.running_var.uniform_(0.5, 2.0)
+            m.weight.data.uniform_(0.5, 1.5)
+            m.bias.data.uniform_(-0.2, 0.2)
+
+
 net = Stage(7, widths=(4, 8, 8, 8), hidden=16)
-for m in net.modules():
-    if isinstance(m, torch.nn.BatchNorm2d):
-        m.running_mean.uniform_(-0.5, 0.5)
-        m.running_var.uniform_(0.5, 2.0)
-        m.weight.data.uniform_(0.5, 1.5)
-        m.bias.data.uniform_(-0.2, 0.2)
+randomise_batchnorm(net)
 net.eval()
 os.makedirs(out, exist_ok=True)
 export(net, os.path.join(out, "cnn_parity.onnx"))
@@ -31,3 +41,12 @@ with torch.no_grad():
 x.numpy().astype("<f4").tofile(os.path.join(out, "cnn_parity_input.f32"))
 y.numpy().astype("<f4").tofile(os.path.join(out, "cnn_parity_output.f32"))
 print(f"wrote {out}/cnn_parity.onnx, inputs 3x1x64x64, outputs {tuple(y.shape)}")
+
+landmarks = Stage(136, widths=(4, 8, 8, 8), hidden=16)
+randomise_batchnorm(landmarks)
+with torch.no_grad():
+    landmarks.head[-1].weight.zero_()
+    landmarks.head[-1].bias.copy_(torch.tensor([3.0, 0.0] * 68))
+landmarks.eval()
+export(landmarks, os.path.join(out, "cnn_landmarks_fixture.onnx"), output="displacement")
+print(f"wrote {out}/cnn_landmarks_fixture.onnx")

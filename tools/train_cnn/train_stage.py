@@ -3,9 +3,12 @@
 start's parameters, the update to the dense teacher label's parameters (pose about the face
 centre and 49 expressions: libfacetrack/src/cnn/update_net.hpp, written by make_cnn_samples).
 The labels are MediaPipe's predictions fitted with the face model: teacher labels, not ground truth.
+With --landmarks, the cascade's last net instead: the 68 annotated 300-W points' displacements
+from the start's projected landmarks (libfacetrack/src/cnn/landmark_net.hpp), trained on the
+300-W crops and their profiled copies (the clips have no annotated points).
 
   /usr/bin/python3 tools/train_cnn/train_stage.py [--samples build/cnn_samples]
-        [--out build/cnn/stage1] [--minutes 30] [--resume]
+        [--out build/cnn/stage1] [--minutes 30] [--resume] [--landmarks]
 
 Trains on the samples whose split is "train" (300-W train crops, their profiled copies turned
 to large yaw, training clips), each epoch all the 300-W and profiled samples and as many clip
@@ -13,7 +16,7 @@ samples drawn afresh, half of them mirrored (patch flipped, update mirrored, lef
 shapes swapped); reports on the 300-W validation crops and their profiled copies; the 300-W
 test crops and the held-out clips (d14, franck) are never read.
 Logs each epoch (losses, seconds) to OUT.log, keeps OUT.pt (resumable) and OUT.best.pt (the
-epoch with the lowest rotation error on the 300-W validation crops) and exports the best as
+epoch with the lowest rotation error, or point error, on the 300-W validation crops) and exports the best as
 OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads).
 """
 import argparse, copy, csv, math, os, sys, time
@@ -43,6 +46,35 @@ def load(samples_dir, name, splits):
     return torch.as_tensor(np.asarray(patches[keep])), update, [c[2:] for c in header[first:]]
 
 
+# A landmark displacement larger than this (patch pixels) comes from a start turned nearly
+# edge-on, where the patch shows little of the face and the canonical map degenerates: not a
+# sample to learn from.
+MAX_DISPLACEMENT_PX = 24.0
+
+
+def load_landmarks(samples_dir, name, splits):
+    """Patches and landmark displacements (make_cnn_samples' OUT/NAME_landmarks.npy) of the samples in `splits`."""
+    path = os.path.join(samples_dir, name + "_landmarks.npy")
+    if not os.path.exists(path):
+        return None
+    patches = np.load(os.path.join(samples_dir, name + "_patches.npy"), mmap_mode="r")
+    targets = np.load(path)
+    _, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
+    size = np.linalg.norm(targets.reshape(len(targets), -1, 2), axis=2).max(1)
+    keep = [i for i, r in enumerate(rows) if r[1] in splits and size[i] <= MAX_DISPLACEMENT_PX]
+    columns = [f"l_{axis}{i}" for i in range(targets.shape[1] // 2) for axis in "xy"]
+    return torch.as_tensor(np.asarray(patches[keep])), torch.as_tensor(targets[keep]), columns
+
+
+def landmark_mirror_permutation(samples_dir, columns):
+    """Per displacement output, the output it becomes in the mirrored face, and its sign: point i
+    goes to point m(i) (OUT/landmarks_mirror.txt), its x displacement negated."""
+    with open(os.path.join(samples_dir, "landmarks_mirror.txt")) as f:
+        mirror = [int(v) for v in f.read().split()]
+    order = [2 * mirror[i // 2] + i % 2 for i in range(len(columns))]
+    return torch.tensor(order), torch.tensor([-1.0, 1.0] * (len(columns) // 2))
+
+
 def mirror_permutation(columns):
     """Per update output, the output it becomes in the mirrored face, and its sign: the rotation
     M R M with M = diag(-1, 1, 1) is the angle-axis (w_x, -w_y, -w_z), the centre's move (-c_x, c_y, c_z)
@@ -67,7 +99,7 @@ def standardise(patches):
     return (x - mean) / std
 
 
-def export(net, path, scale=None):
+def export(net, path, scale=None, output="update"):
     """ONNX opset 13 in eval mode: BatchNorm folded into the convolutions, only Conv, Relu,
     Flatten and Gemm, which OpenCV 4.6's dnn loads. `scale`: per output, folded into the last
     layer, so that the file gives the update itself."""
@@ -77,7 +109,7 @@ def export(net, path, scale=None):
             last = net.head[-1]
             last.weight.mul_(scale[:, None])
             last.bias.mul_(scale)
-    torch.onnx.export(net, torch.zeros(1, 1, 64, 64), path, opset_version=13, input_names=["patch"], output_names=["update"],
+    torch.onnx.export(net, torch.zeros(1, 1, 64, 64), path, opset_version=13, input_names=["patch"], output_names=[output],
                       do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
 
 
@@ -114,33 +146,41 @@ def main():
     p.add_argument("--resume", action="store_true")
     p.add_argument("--export-only", action="store_true", help="export OUT.pt's net (e.g. while it trains) and stop")
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--landmarks", action="store_true", help="train the landmark net (68 displacements) instead of a stage")
     a = p.parse_args()
     torch.set_num_threads(a.threads)
     torch.manual_seed(1)
     os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
 
-    faces, profiled, clips = (load(a.samples, n, {"train"}) for n in ("faces300w", "profiled", "clips"))
+    loader = load_landmarks if a.landmarks else load
+    faces, profiled, clips = (loader(a.samples, n, {"train"}) for n in ("faces300w", "profiled", "clips"))
     sets = [t for t in (faces, profiled, clips) if t is not None]
     columns = faces[2]
     x_train = torch.cat([t[0] for t in sets])
     y_train = torch.cat([t[1] for t in sets])
     n_faces, n_profiled = len(faces[0]), len(profiled[0]) if profiled is not None else 0
-    n_clips = len(clips[0])
+    n_clips = len(clips[0]) if clips is not None else 0
     validation = {}
     for name in ("faces300w", "profiled"):
-        v = load(a.samples, name, {"validation"})
-        if v is None:
+        v = loader(a.samples, name, {"validation"})
+        if v is None or len(v[0]) == 0:
             continue
-        perturbed = v[1][:, :6].abs().sum(1) > 0  # the label's own patches count in training, not in these figures
-        validation[name] = (standardise(v[0][perturbed]), v[1][perturbed])
-    flip_order, flip_sign = mirror_permutation(columns)
+        if not a.landmarks:  # the label's own patches count in training, not in these figures
+            perturbed = v[1][:, :6].abs().sum(1) > 0
+            v = (v[0][perturbed], v[1][perturbed])
+        validation[name] = (standardise(v[0]), v[1])
+    flip_order, flip_sign = landmark_mirror_permutation(a.samples, columns) if a.landmarks else mirror_permutation(columns)
     # The net regresses each output over its spread on the training targets (about 9x faster
     # to train than raw radians and depth fractions of very different sizes; export folds the
     # spread back in); the loss weighs outputs alike within pose and within expressions, the
-    # expressions together a quarter as much as pose.
+    # expressions together a quarter as much as pose; displacements all alike.
     scale = y_train.std(0).clamp_min(1e-3)
-    weight = torch.cat([torch.ones(6), torch.full((y_train.shape[1] - 6,), 0.25)])
+    if a.landmarks:
+        weight = torch.ones(y_train.shape[1])
+    else:
+        weight = torch.cat([torch.ones(6), torch.full((y_train.shape[1] - 6,), 0.25)])
     weight = weight / weight.sum()
+    output_name = "displacement" if a.landmarks else "update"
     print(f"training samples: {n_faces} 300-W, {n_profiled} profiled, {n_clips} clip; validation "
           f"{ {k: len(v[0]) for k, v in validation.items()} }; outputs {y_train.shape[1]}", flush=True)
 
@@ -149,7 +189,7 @@ def main():
     epoch, started, best = 0, time.time(), float("inf")
     if a.export_only:
         net.load_state_dict(torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))["net"])
-        export(net, a.out + ".onnx", scale)
+        export(net, a.out + ".onnx", scale, output_name)
         write_columns(a.out, columns)
         print(f"wrote {a.out}.onnx", flush=True)
         return
@@ -165,7 +205,9 @@ def main():
         # All 300-W and profiled samples, and as many clip samples as 300-W ones (the clips are 8
         # people, their frames alike).
         start_clips = n_faces + n_profiled
-        order = torch.cat([torch.randperm(start_clips), start_clips + torch.randint(n_clips, (min(n_faces, n_clips),))])
+        order = torch.randperm(start_clips)
+        if n_clips:
+            order = torch.cat([order, start_clips + torch.randint(n_clips, (min(n_faces, n_clips),))])
         order = order[torch.randperm(len(order))]
         total = 0.0
         for i in range(0, len(order), a.batch):
@@ -189,6 +231,13 @@ def main():
         with torch.no_grad():
             for name, (x_val, y_val) in validation.items():
                 pred = torch.cat([net(x_val[i:i + 512]) for i in range(0, len(x_val), 512)]) * scale
+                if a.landmarks:  # mean point distance, patch pixels
+                    before = y_val.view(len(y_val), -1, 2).norm(dim=2).mean().item()
+                    after = (pred - y_val).view(len(y_val), -1, 2).norm(dim=2).mean().item()
+                    if name == "faces300w":
+                        score = after
+                    line += f" {name}: point error {before:.3f} -> {after:.3f} patch px;"
+                    continue
                 rot_before = y_val[:, :3].norm(dim=1) * 180 / math.pi
                 rot_after = (pred[:, :3] - y_val[:, :3]).norm(dim=1) * 180 / math.pi
                 shift_before = y_val[:, 3:6].norm(dim=1).mean().item() * 100
@@ -210,7 +259,7 @@ def main():
         net.load_state_dict(torch.load(a.out + ".best.pt")["net"])
     net.eval()
 
-    export(net, a.out + ".onnx", scale)
+    export(net, a.out + ".onnx", scale, output_name)
     write_columns(a.out, columns)
     print(f"wrote {a.out}.onnx", flush=True)
 

@@ -2,7 +2,8 @@
 /// \file
 /// The CNN cascade of the "cnn" stage (thesis 4.4): small nets that regress,
 /// from the face texture warped into a canonical patch at the current pose and
-/// expression, the update to both. Trained by tools/train_cnn on the dense
+/// expression, the update to both, and optionally a last net that moves the
+/// 68 landmarks from where the refined face projects them. Trained by tools/train_cnn on the dense
 /// teacher labels (MediaPipe's mesh fitted with the face model; docs/cnn.md).
 ///
 /// Like the other models it is data: load it once, it is immutable, share it
@@ -33,6 +34,8 @@ public:
     const std::string& provenance() const;
     /// Per stage, how many rounds it runs.
     std::vector<int> rounds() const;
+    /// Whether it has the landmark net: the stage then reports its landmarks.
+    bool hasLandmarkNet() const;
 
     /// Internal representation, for facetrack's own stages.
     const cnn::CnnModelData& data() const { return *data_; }

@@ -43,6 +43,7 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
         w.put<std::int32_t>(s.rounds);
         w.putString(s.onnx);
     }
+    w.putString(m.landmark_net);
     w.putString(m.provenance);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
@@ -64,6 +65,7 @@ CnnModelData readCnnModel(const std::string& path) {
         s.onnx = r.getString();
         m.stages.push_back(std::move(s));
     }
+    m.landmark_net = r.getString();
     m.provenance = r.getString();
     r.expectEnd();
     validate(m, what);
@@ -94,5 +96,7 @@ std::vector<int> CnnModel::rounds() const {
     for (const auto& s : data_->stages) r.push_back(s.rounds);
     return r;
 }
+
+bool CnnModel::hasLandmarkNet() const { return !data_->landmark_net.empty(); }
 
 }  // namespace facetrack

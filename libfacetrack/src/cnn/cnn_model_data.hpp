@@ -17,11 +17,13 @@ struct CnnModelData {
     /// The nets' expression outputs, native face model names, in output order.
     std::vector<std::string> expressions;
     std::vector<CnnStageData> stages;
+    /// The final net, the 68 landmarks' displacements (landmark_net.hpp): ONNX bytes, or empty for none.
+    std::string landmark_net;
     std::string provenance;
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 1;
+constexpr std::uint32_t kCnnModelVersion = 2;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

@@ -1,11 +1,13 @@
 #include "cnn/cnn_stage.hpp"
 
 #include "cnn/cnn_model_data.hpp"
+#include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
 
 #include <algorithm>
+#include <optional>
 
 namespace facetrack::cnn {
 
@@ -16,6 +18,7 @@ struct CnnFaceState final : pipeline::StageState {
     std::vector<float> identity;  ///< the identity work.identity_shape is of
     bool shaped = false;
     RefineWork work;
+    Eigen::Matrix3Xd landmark_identity_shape, landmark_slots;  ///< of the landmark basis
 };
 
 class CnnStage final : public pipeline::Stage {
@@ -25,8 +28,12 @@ public:
         const CnnModelData& d = cascade_->data();
         layout_ = makeWarpLayout(face_->data(), expressionIndices(face_->expressionNames(), d.expressions), d.patch_size);
         for (std::size_t i = 0; i < d.stages.size(); ++i) {
-            nets_.emplace_back(d.stages[i].onnx, d.patch_size, static_cast<int>(d.expressions.size()),
+            nets_.emplace_back(d.stages[i].onnx, d.patch_size, 6 + static_cast<int>(d.expressions.size()),
                                "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1));
+        }
+        if (cascade_->hasLandmarkNet()) {
+            landmark_basis_ = landmarkBasis(*face_, layout_.anchors.expressions);
+            landmark_net_.emplace(d.landmark_net, d.patch_size, kLandmarkOutputs, "CNN cascade '" + cascade_->sourcePath() + "' landmark net");
         }
     }
 
@@ -38,7 +45,8 @@ public:
         }
         return {"cnn", true,
                 std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
-                    std::to_string(layout_.anchors.expressions.size()) + " expressions (" + cascade_->sourcePath() + ")"};
+                    std::to_string(layout_.anchors.expressions.size()) + " expressions" + (landmark_net_ ? ", landmark net" : "") + " (" +
+                    cascade_->sourcePath() + ")"};
     }
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override {
@@ -59,6 +67,7 @@ public:
             Eigen::VectorXd a = Eigen::VectorXd::Zero(layout_.anchors.identityCount());
             for (std::size_t k = 0; k < s.identity.size() && k < static_cast<std::size_t>(a.size()); ++k) a[static_cast<Eigen::Index>(k)] = s.identity[k];
             s.work.identity_shape = fit::shapeWithIdentity(layout_.anchors, a);
+            if (landmark_net_) s.landmark_identity_shape = fit::shapeWithIdentity(landmark_basis_, a);
             s.shaped = true;
         }
         readParams(*r.pose, r.expression->native, s.params);
@@ -72,10 +81,32 @@ public:
             native[static_cast<std::size_t>(layout_.anchors.expressions[k])] = static_cast<float>(s.params.expression[static_cast<Eigen::Index>(k)]);
         }
         r.expression->arkit = face_->toArkit(native);
+        if (landmark_net_) moveLandmarks(frame, face, s);
         return true;
     }
 
 private:
+    /// The landmark net's landmarks (landmark_net.hpp) at the refined parameters, in place of the
+    /// landmark stage's; kept when a value is not finite.
+    void moveLandmarks(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, CnnFaceState& s) {
+        projectAnchors(layout_, s.work.identity_shape, frame.camera, s.params, s.work.anchors3d, s.work.anchors);
+        if (!s.work.anchors.allFinite()) return;
+        warpFace(layout_, frame.gray, s.work.anchors, s.work.patch);
+        const fit::Landmarks2d q = displaced(patchToFrame(layout_, s.work.anchors),
+                                             projectedLandmarks(landmark_basis_, s.landmark_identity_shape, frame.camera, s.params, s.landmark_slots),
+                                             landmark_net_->predict(s.work.patch));
+        if (!q.allFinite()) return;
+        Landmarks68& out = face.result.landmarks.emplace();
+        const float x0 = static_cast<float>(q(0, 0)), y0 = static_cast<float>(q(1, 0));
+        Box bounds{x0, y0, x0, y0};
+        for (int i = 0; i < model::kLandmarkCount; ++i) {
+            const float x = static_cast<float>(q(0, i)), y = static_cast<float>(q(1, i));
+            out[static_cast<std::size_t>(i)] = {x, y};
+            bounds = {std::min(bounds.x0, x), std::min(bounds.y0, y), std::max(bounds.x1, x), std::max(bounds.y1, y)};
+        }
+        face.locate(bounds);
+    }
+
     /// The fit's public pose and weights as the cascade's parameters.
     void readParams(const HeadPose& pose, const std::vector<float>& native, fit::FaceParams& p) const {
         fit::poseParamsOf(pose, p);
@@ -88,7 +119,9 @@ private:
     std::shared_ptr<const CnnModel> cascade_;
     std::shared_ptr<const FaceModel> face_;
     WarpLayout layout_;
-    std::vector<UpdateNet> nets_;
+    std::vector<PatchNet> nets_;
+    fit::FitBasis landmark_basis_;
+    std::optional<PatchNet> landmark_net_;
 };
 
 }  // namespace

@@ -1,12 +1,10 @@
 #pragma once
-// One stage of the CNN cascade (thesis 4.4): a net regressing, from the face
-// texture warped at the current parameters (face_warp.hpp), the update that
-// takes those parameters to the face's own. Trained by
-// tools/train_cnn/train_stage.py (docs/cnn.md); run here with OpenCV's dnn.
+// One stage of the CNN cascade (thesis 4.4): a net (patch_net.hpp) regressing,
+// from the face texture warped at the current parameters (face_warp.hpp), the
+// update that takes those parameters to the face's own.
 //
-// The net's input is the patch standardised per patch, (I - mean) / sigma
-// (population sigma, I in [0, 1]); its output, for E expressions in the
-// layout's order, is the update u = (dw, dc, db), 6 + E numbers, with
+// Its output, for E expressions in the layout's order, is the update
+// u = (dw, dc, db), 6 + E numbers, with
 // c = R c_0 + t the face centre (WarpLayout::centre c_0) in the camera frame:
 //   dw  (3): the angle-axis of R_face R_start^T, so R_face = R(dw) R_start;
 //   dc  (3): (c_face - c_start) / z(c_start), the centre's move over its depth;
@@ -15,33 +13,9 @@
 // keeps a turn from looking like a shift.
 
 #include "cnn/face_warp.hpp"
-
-#include <opencv2/dnn.hpp>
-
-#include <string>
+#include "cnn/patch_net.hpp"
 
 namespace facetrack::cnn {
-
-class UpdateNet {
-public:
-    /// A net from an ONNX file's bytes; `what` names it in errors. Throws
-    /// Error when it does not load or is not a net of 1 x size x size -> 6 +
-    /// `expressions` outputs.
-    UpdateNet(const std::string& onnx, int patchSize, int expressions, const std::string& what);
-
-    int expressionCount() const { return expressions_; }
-
-    /// The update for `patch` (CV_8U, patchSize x patchSize): 6 + E values.
-    /// Not thread-safe (the net keeps its buffers): one per thread.
-    const Eigen::VectorXd& predict(const cv::Mat& patch);
-
-private:
-    cv::dnn::Net net_;
-    int size_, expressions_;
-    cv::Mat input_;
-    std::vector<cv::Mat> outputs_;
-    Eigen::VectorXd update_;
-};
 
 /// The update u(start -> face) defined above.
 Eigen::VectorXd updateBetween(const WarpLayout& layout, const fit::FaceParams& start, const fit::FaceParams& face);
@@ -57,11 +31,11 @@ struct RefineWork {
     cv::Mat patch;
 };
 
-/// `rounds` rounds of: warp at params, predict, apply (a stage trained on its
+/// `rounds` rounds of: warp at params, predict (a net of 6 + E outputs), apply (a stage trained on its
 /// own residuals' range converges by repeating). work.identity_shape must be set.
 /// False (params then meaningless) when the face left the space in front of the
 /// camera or a value stopped being finite.
-bool refine(const WarpLayout& layout, UpdateNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
+bool refine(const WarpLayout& layout, PatchNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
             int rounds, RefineWork& work);
 
 }  // namespace facetrack::cnn

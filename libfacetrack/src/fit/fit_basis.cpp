@@ -135,6 +135,12 @@ PointBasis buildPointBasis(const model::FaceModelData& data, const std::vector<S
 }
 
 FitBasis buildFitBasis(const model::FaceModelData& data) {
+    std::vector<SurfacePoint> landmarks(model::kLandmarkCount);
+    for (int i = 0; i < model::kLandmarkCount; ++i) landmarks[i].vertices.fill(data.landmark_vertices[i]);
+    return buildFitBasis(data, observableExpressions(data, landmarks));
+}
+
+FitBasis buildFitBasis(const model::FaceModelData& data, const std::vector<int>& expressions) {
     const auto& lm = data.landmark_vertices;
     std::vector<std::uint32_t> vertices;
     std::array<int, model::kLandmarkCount> landmark_slots{};
@@ -151,11 +157,9 @@ FitBasis buildFitBasis(const model::FaceModelData& data) {
     }
     std::vector<SurfacePoint> points(vertices.size());
     for (std::size_t s = 0; s < vertices.size(); ++s) points[s].vertices = {vertices[s], vertices[s], vertices[s]};
-    std::vector<SurfacePoint> landmarks(model::kLandmarkCount);
-    for (int i = 0; i < model::kLandmarkCount; ++i) landmarks[i].vertices = {lm[i], lm[i], lm[i]};
 
     FitBasis b;
-    static_cast<PointBasis&>(b) = buildPointBasis(data, points, observableExpressions(data, landmarks));
+    static_cast<PointBasis&>(b) = buildPointBasis(data, points, expressions);
     b.vertices = std::move(vertices);
     b.landmark_slots = landmark_slots;
     b.contour_slots = std::move(contour_slots);

@@ -90,7 +90,11 @@ struct FitBasis : PointBasis {
     Eigen::VectorXd expressionPriorWeights(double l2) const;
 };
 
+/// With the expressions the 68 landmarks observe (observableExpressions).
 FitBasis buildFitBasis(const model::FaceModelData& data);
+/// With `expressions` (indices into data.expressions), e.g. to project the
+/// landmarks of a face whose other expressions are known (cnn/landmark_net.hpp).
+FitBasis buildFitBasis(const model::FaceModelData& data, const std::vector<int>& expressions);
 
 /// neutral + B_id a over the basis slots (3 x S): the shape the per-frame fit
 /// deforms once identity is fixed.

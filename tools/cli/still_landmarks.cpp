@@ -1,0 +1,41 @@
+#include "still_landmarks.hpp"
+
+#include "app/image_view.hpp"
+#include "landmarks/lbf.hpp"
+
+#include <filesystem>
+
+namespace facetrack::cli {
+
+StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
+                               const std::string& boxPrior)
+    : lbf_(std::move(lbf)), method_("facetrack LBF"), box_prior_(boxPrior) {
+    if (lbfOnly) return;
+    std::error_code ec;
+    const std::string path = cascadePath.empty() ? CnnModel::defaultPath() : cascadePath;
+    if (cascadePath.empty() && !std::filesystem::exists(path, ec)) return;
+    auto cascade = CnnModel::load(path);
+    if (!cascade->hasLandmarkNet()) {
+        if (!cascadePath.empty()) throw Error("CNN cascade '" + path + "' has no landmark net");
+        return;
+    }
+    TrackerConfig still;
+    still.filter.enabled = false;
+    still.max_faces = 1;
+    still.detector.kind = boxPrior == "cascade" ? DetectorKind::Cascade : DetectorKind::YuNet;  // its kind picks LBF's box prior
+    tracker_ = std::make_unique<Tracker>(Models{FaceModel::loadDefault(), lbf_, nullptr, std::move(cascade)}, still);
+    method_ = "facetrack LBF + fit + CNN";
+}
+
+Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Box& box, bool* dropped) {
+    if (dropped) *dropped = false;
+    if (tracker_) {
+        tracker_->reset();
+        tracker_->process(tools::viewOf(bgr), 0.0, {box}, result_);
+        if (!result_.faces.empty() && result_.faces[0].landmarks) return *result_.faces[0].landmarks;
+        if (dropped) *dropped = true;
+    }
+    return landmarks::toLandmarks68(landmarks::alignLandmarks(lbf_->data(), gray, landmarks::shapeFromBox(lbf_->data(), box, box_prior_)));
+}
+
+}  // namespace facetrack::cli

@@ -1,0 +1,39 @@
+#pragma once
+// The 68 landmarks of a face in a still image, from a box, the way users get
+// them: the whole pipeline (LBF, the fit, the CNN cascade with its landmark
+// net: docs/cnn.md), or LBF alone (issue 17: `landmarks` and `eval-landmarks`
+// report the pipeline's by default).
+
+#include "facetrack/facetrack.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <memory>
+#include <string>
+
+namespace facetrack::cli {
+
+class StillLandmarks {
+public:
+    /// `cascadePath`: a CNN cascade file, or "" for the shipped one when it
+    /// exists. `lbfOnly`, or no cascade with a landmark net: LBF alone.
+    /// `boxPrior`: the detector whose boxes are given, "yunet" or "cascade".
+    StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
+                   const std::string& boxPrior = "yunet");
+
+    /// What the landmarks are: "LBF + fit + CNN" or "LBF".
+    const std::string& method() const { return method_; }
+    bool usesPipeline() const { return tracker_ != nullptr; }
+
+    /// The landmarks of the face in `box`. Where the
+    /// pipeline drops the face (its fit does not hold), LBF's; `dropped` says so.
+    Landmarks68 of(const cv::Mat& bgr, const cv::Mat& gray, const Box& box, bool* dropped = nullptr);
+
+private:
+    std::shared_ptr<const LandmarkModel> lbf_;
+    std::unique_ptr<Tracker> tracker_;
+    FrameResult result_;
+    std::string method_, box_prior_;
+};
+
+}  // namespace facetrack::cli
