@@ -36,8 +36,10 @@ void BM_Cnn_Stage(benchmark::State& state) {
         face.result = tracked->result.faces[0];  // the same start every time
         stage->run(input, face, faceState.get());
         benchmark::DoNotOptimize(face.result.pose);
+        benchmark::DoNotOptimize(face.result.landmarks);
     }
     state.counters["rounds"] = rounds;
+    state.counters["landmark_net"] = models.cnn->hasLandmarkNet();
 }
 BENCHMARK(BM_Cnn_Stage)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 

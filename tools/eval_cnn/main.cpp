@@ -14,13 +14,24 @@
 // profiling (profile/face_profiling.hpp, the large-pose evaluation set), the
 // errors by 15 deg bin of the copy's |yaw|, from perturbed starts and from LBF + fit.
 //
+// When the cascade has a landmark net, also the landmarks against the 300-W
+// annotation (carried to the profiled copies: profile::carriedLandmarks): the
+// tracker's LBF alone and its whole pipeline (LBF, fit, cascade, landmark net;
+// where the pipeline drops a face, LBF's landmarks), each from the tracker's own
+// YuNet detection, as NME over the eye-corner distance (300-W) and over sqrt(w h)
+// of the annotation's box (large poses).
+//
 // The rounds are the cascade's: each stage run as often as the file says.
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
 #include "cnn/cnn_model_data.hpp"
+#include "facetrack/detector.hpp"
+#include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "common/faces300w.hpp"
+#include "core/pts.hpp"
+#include "core/shape2d.hpp"
 #include "dense/dense_fit.hpp"
 #include "dense/label_table.hpp"
 #include "facetrack/cnn_model.hpp"
@@ -31,6 +42,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <memory>
+#include <optional>
 #include <cstdio>
 #include <random>
 
@@ -46,16 +59,31 @@ struct RoundErrors {
     std::vector<double> rotation_deg, depth_pct, expression;
 };
 
+/// Landmark errors of one method over a set of images.
+struct LandmarkErrors {
+    std::vector<double> eye_corner_nme, box_nme;
+    int dropped = 0;  ///< faces the pipeline dropped (LBF's landmarks counted)
+};
+
+double meanOf(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
+
+void reportLandmarks(const char* name, const LandmarkErrors& e) {
+    if (e.box_nme.empty()) return;
+    std::printf("%-22s landmarks: %4zu faces, NME %5.2f %% of the eye-corner distance, %5.2f %% of sqrt(box)%s\n", name, e.box_nme.size(),
+                100.0 * meanOf(e.eye_corner_nme), 100.0 * meanOf(e.box_nme),
+                e.dropped ? (" (" + std::to_string(e.dropped) + " dropped: LBF's)").c_str() : "");
+}
+
 void report(const char* name, RoundErrors e) {
     if (e.rotation_deg.empty()) {
         std::printf("%-8s no faces\n", name);
         return;
     }
-    const auto mean = [](const std::vector<double>& v) {
-        double s = 0;
-        for (double x : v) s += x;
-        return v.empty() ? 0.0 : s / static_cast<double>(v.size());
-    };
+    const auto mean = meanOf;
     const double within = static_cast<double>(std::count_if(e.rotation_deg.begin(), e.rotation_deg.end(), [](double x) { return x < 3.0; }));
     std::nth_element(e.rotation_deg.begin(), e.rotation_deg.begin() + static_cast<std::ptrdiff_t>(e.rotation_deg.size() / 2), e.rotation_deg.end());
     std::printf("%-8s rotation mean %5.2f median %5.2f deg, within 3 deg %5.1f %%; depth %5.2f %%; expression MAE %.4f\n", name,
@@ -77,7 +105,7 @@ int run(int argc, char** argv) {
     const double yawDeg = args.number("--yaw-deg", 15.0), depth = args.number("--depth", 0.10);
     if (starts < 1) throw Error("--starts must be at least 1");
 
-    const auto model = FaceModel::load(FaceModel::defaultPath());
+    const auto model = FaceModel::loadDefault();  // the shipped tracker's: with the landmark convention
     const auto cascade = CnnModel::load(args.get("--cascade", CnnModel::defaultPath()));
     const cnn::CnnModelData& data = cascade->data();
     const std::vector<int> expressionIds = cnn::expressionIndices(model->expressionNames(), data.expressions);
@@ -105,8 +133,18 @@ int run(int argc, char** argv) {
     // face's first frames have).
     TrackerConfig still;
     still.filter.enabled = false;
-    Tracker lbf(Models{model, LandmarkModel::loadDefault(), nullptr, nullptr}, still);
-    FrameResult result;
+    const auto lbfModel = LandmarkModel::loadDefault();
+    Tracker lbf(Models{model, lbfModel, nullptr, nullptr}, still);
+    FrameResult result, fullResult;
+    // The whole pipeline, when the cascade moves the landmarks too.
+    std::unique_ptr<Tracker> full;
+    if (cascade->hasLandmarkNet()) full = std::make_unique<Tracker>(Models{model, lbfModel, nullptr, cascade}, still);
+    const fit::FitBasis landmarkBasis = cnn::landmarkBasis(*model, expressionIds);  // to carry the annotation to profiled copies
+    DetectorConfig yunet;
+    yunet.kind = DetectorKind::YuNet;
+    const auto detector = createFaceDetector(yunet);
+    LandmarkErrors cropLbf, cropFull;
+    std::vector<LandmarkErrors> binLbf(kBins), binFull(kBins);
     cnn::RefineWork work;
     const auto record = [&](std::vector<RoundErrors>& errors, int round, const fit::FaceParams& params, const fit::FaceParams& label) {
         RoundErrors& e = errors[static_cast<std::size_t>(round)];
@@ -130,8 +168,28 @@ int run(int argc, char** argv) {
         const fit::FaceParams label = dense::labelParams(columns, row);
         const Eigen::VectorXd labelIdentity = dense::labelIdentity(columns, row);
         // One image: `starts` perturbed starts, and the tracker's LBF + fit, each through the cascade.
-        const auto evaluate = [&](const cv::Mat& image, const fit::FaceParams& truth, std::vector<RoundErrors>& perturbed,
-                                  std::vector<RoundErrors>& fitted) {
+        const auto landmarkErrors = [&](const cv::Mat& image, const Box& box, const fit::Landmarks2d& points, LandmarkErrors& ofLbf,
+                                        LandmarkErrors& ofFull) {
+            const auto shape = [](const Landmarks68& l) {
+                core::Shape2 s(2, 68);
+                for (int k = 0; k < 68; ++k) s.col(k) << l[static_cast<std::size_t>(k)].x, l[static_cast<std::size_t>(k)].y;
+                return s;
+            };
+            const core::Shape2 truthShape = points.cast<float>();
+            const core::Shape2 fromLbf = shape(*result.faces[0].landmarks);
+            full->reset();
+            full->process(ImageView{image.data, image.cols, image.rows, image.step, PixelFormat::Gray8}, 0.0, {box}, fullResult);
+            const bool kept = !fullResult.faces.empty() && fullResult.faces[0].landmarks;
+            const core::Shape2 fromFull = kept ? shape(*fullResult.faces[0].landmarks) : fromLbf;
+            ofFull.dropped += !kept;
+            for (auto [errors, s] : {std::pair{&ofLbf, &fromLbf}, std::pair{&ofFull, &fromFull}}) {
+                errors->eye_corner_nme.push_back(core::nme68(*s, truthShape));
+                errors->box_nme.push_back(core::nmeBox(*s, truthShape));
+            }
+        };
+        const auto evaluate = [&](const cv::Mat& image, const fit::FaceParams& truth, const fit::Landmarks2d& points,
+                                  std::vector<RoundErrors>& perturbed, std::vector<RoundErrors>& fitted, LandmarkErrors& ofLbf,
+                                  LandmarkErrors& ofFull) {
             work.identity_shape = fit::shapeWithIdentity(layout.anchors, labelIdentity);
             for (int s = 0; s < starts; ++s) {
                 fit::FaceParams params = truth;  // turned about the face centre and scaled
@@ -142,9 +200,14 @@ int run(int argc, char** argv) {
                 cnn::applyUpdate(layout, move, params);
                 cascadeFrom(params, truth, image, camera, perturbed);
             }
+            // The tracker starts from YuNet's box of this face (as eval-landmarks does; a crop can show others).
+            const ImageView view{image.data, image.cols, image.rows, image.step, PixelFormat::Gray8};
+            const auto box = tools::matchingBox(detector->detect(view), points.cast<float>());
+            if (!box) return false;
             lbf.reset();
-            lbf.process(ImageView{image.data, image.cols, image.rows, image.step, PixelFormat::Gray8}, 0.0, result);
+            lbf.process(view, 0.0, {*box}, result);
             if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) return false;
+            if (full) landmarkErrors(image, *box, points, ofLbf, ofFull);
             fit::FaceParams start = truth;
             fit::poseParamsOf(*result.faces[0].pose, start);
             for (std::size_t k = 0; k < expressionIds.size(); ++k)
@@ -153,7 +216,10 @@ int run(int argc, char** argv) {
             cascadeFrom(start, truth, image, camera, fitted);
             return true;
         };
-        if (!evaluate(grey, label, rounds, fromFit)) ++unfitted;
+        const core::Shape2 annotated = core::readPts(root + "/" + row.key.substr(0, row.key.rfind('.')) + ".pts");
+        if (annotated.cols() != 68) throw Error(row.key + ": its .pts does not have 68 points");
+        const fit::Landmarks2d points = annotated.cast<double>();
+        if (!evaluate(grey, label, points, rounds, fromFit, cropLbf, cropFull)) ++unfitted;
         if (profiledTries > 0) {
             const std::vector<float> identity(labelIdentity.data(), labelIdentity.data() + labelIdentity.size());
             for (const auto& copy : profile::profiledCopies(*model, grey, camera, identity,
@@ -161,8 +227,9 @@ int run(int argc, char** argv) {
                                                             profiledTries, rng)) {
                 const int bin = std::clamp(static_cast<int>(std::abs(fit::eulerDegrees(copy.label.omega()).y()) / 15.0) - 1, 0, kBins - 1);
                 ++binFaces[static_cast<std::size_t>(bin)];
-                if (!evaluate(copy.image, copy.label, binned[static_cast<std::size_t>(bin)], binnedFit[static_cast<std::size_t>(bin)]))
-                    ++binUnfitted[static_cast<std::size_t>(bin)];
+                const fit::Landmarks2d carried = profile::carriedLandmarks(layout, landmarkBasis, labelIdentity, camera, label, points, copy.label);
+                const auto b = static_cast<std::size_t>(bin);
+                if (!evaluate(copy.image, copy.label, carried, binned[b], binnedFit[b], binLbf[b], binFull[b])) ++binUnfitted[b];
             }
         }
         if (++crops % 20 == 0) std::fprintf(stderr, "\r%d crops", crops);
@@ -172,17 +239,21 @@ int run(int argc, char** argv) {
     std::printf("%d %s crops x %d starts (yaw +-%.0f deg, scale +-%.0f %%), against the dense teacher labels:\n", crops, split.c_str(), starts,
                 yawDeg, 100.0 * depth);
     for (int i = 0; i <= iterations; ++i) report(i == 0 ? "start" : ("round " + std::to_string(i)).c_str(), rounds[static_cast<std::size_t>(i)]);
-    std::printf("from the tracker's LBF + fit (%d crops; %d without a fitted face):\n", crops - unfitted, unfitted);
+    std::printf("from the tracker's LBF + fit (%d crops; %d without a YuNet box or a fitted face):\n", crops - unfitted, unfitted);
     for (int i = 0; i <= iterations; ++i) report(i == 0 ? "fit" : ("round " + std::to_string(i)).c_str(), fromFit[static_cast<std::size_t>(i)]);
+    reportLandmarks("LBF", cropLbf);
+    reportLandmarks("LBF + fit + CNN", cropFull);
     for (int bin = 0; bin < kBins; ++bin) {
         if (binFaces[static_cast<std::size_t>(bin)] == 0) continue;
-        std::printf("profiled, |yaw| %d-%d deg: %d faces (%d without a fitted face)\n", 15 * (bin + 1), 15 * (bin + 2),
+        std::printf("profiled, |yaw| %d-%d deg: %d faces (%d without a YuNet box or a fitted face)\n", 15 * (bin + 1), 15 * (bin + 2),
                     binFaces[static_cast<std::size_t>(bin)], binUnfitted[static_cast<std::size_t>(bin)]);
         const auto& b = binned[static_cast<std::size_t>(bin)];
         const auto& f = binnedFit[static_cast<std::size_t>(bin)];
         report("  start", b.front());
         report("  cascade", b.back());
         if (!f.front().rotation_deg.empty()) report("  fit", f.front()), report("  fit+cnn", f.back());
+        reportLandmarks("  LBF", binLbf[static_cast<std::size_t>(bin)]);
+        reportLandmarks("  LBF + fit + CNN", binFull[static_cast<std::size_t>(bin)]);
     }
     return 0;
 }

@@ -12,9 +12,15 @@
 //   build/tools/make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb 0] [--clip-perturb N]
 //                                [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1]
 //                                [--expression-sigma 0.1] [--profiled N] [--limit N] [--no-clips]
+//                                [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]
 //
 // With --profiled N, N copies of each 300-W crop turned to a larger yaw by face
 // profiling (profile/face_profiling.hpp) and their samples, in the set "profiled".
+// With --starts-from, the 300-W crops' and copies' starts are perturbed from what
+// the tracker (LBF, fit and that cascade, or LBF and fit alone for "fit"; mean
+// identity) says of each image rather than from the label: what the landmark net,
+// or a first stage, sees at run time. Images where it finds no face, or a start
+// more than --max-start-deg from the label, give no samples.
 //
 // Writes OUT/{faces300w,profiled,clips}_patches.npy (uint8, N x 64 x 64), OUT/{...}_samples.csv
 // (row i: key, split, perturbed 0/1, then the start's omega, t, expressions, the label's
@@ -34,7 +40,9 @@
 #include "core/pts.hpp"
 #include "dense/dense_fit.hpp"
 #include "dense/label_table.hpp"
+#include "facetrack/cnn_model.hpp"
 #include "facetrack/face_model.hpp"
+#include "facetrack/tracker.hpp"
 #include "profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -44,6 +52,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <random>
 
@@ -110,7 +119,42 @@ struct LabelledImage {
     Eigen::VectorXd identity;
     /// The annotated 68 points (300-W crops and their profiled copies), or none.
     std::optional<fit::Landmarks2d> landmarks;
+    /// With --starts-from: what the tracker says of the image (pose, expressions, its identity),
+    /// the start the samples are perturbed from instead of the label.
+    std::optional<fit::FaceParams> start;
+    Eigen::VectorXd start_identity;
 };
+
+/// The tracker's answer on a still image, from YuNet's box of the annotated face (a crop can
+/// show others), as the cascade's parameters; none without a box or a fitted face.
+struct TrackerStarts {
+    Tracker& tracker;
+    FaceDetector& detector;
+    double max_deg;  ///< from the label
+};
+
+std::optional<fit::FaceParams> trackerStart(const TrackerStarts& from, const cv::Mat& grey, const fit::Landmarks2d& points,
+                                            const fit::FaceParams& label, const std::vector<int>& expressions, Eigen::VectorXd& identity) {
+    Tracker& tracker = from.tracker;
+    FaceDetector& detector = from.detector;
+    const ImageView view{grey.data, grey.cols, grey.rows, grey.step, PixelFormat::Gray8};
+    const auto box = tools::matchingBox(detector.detect(view), points.cast<float>());
+    if (!box) return std::nullopt;
+    FrameResult result;
+    tracker.reset();
+    tracker.process(view, 0.0, {*box}, result);
+    if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) return std::nullopt;
+    const FaceResult& face = result.faces[0];
+    fit::FaceParams start;
+    fit::poseParamsOf(*face.pose, start);
+    start.expression.resize(static_cast<Eigen::Index>(expressions.size()));
+    for (std::size_t k = 0; k < expressions.size(); ++k)
+        start.expression[static_cast<Eigen::Index>(k)] = face.expression->native[static_cast<std::size_t>(expressions[k])];
+    identity = Eigen::Map<const Eigen::VectorXf>(face.identity.data(), static_cast<Eigen::Index>(face.identity.size())).cast<double>();
+    const double offDeg = Eigen::AngleAxisd(fit::rotationOf(start.omega()) * fit::rotationOf(label.omega()).transpose()).angle() * 180.0 / M_PI;
+    if (offDeg > from.max_deg) return std::nullopt;
+    return start;
+}
 
 /// What the landmark net's targets (cnn/landmark_net.hpp) are computed with.
 struct LandmarkTargets {
@@ -124,8 +168,8 @@ void writeParams(std::ofstream& out, const fit::FaceParams& p) {
     for (Eigen::Index k = 0; k < p.expression.size(); ++k) std::snprintf(buf, sizeof buf, ",%.4f", p.expression[k]), out << buf;
 }
 
-/// Warps one labelled image: the label's own parameters, then `perturb.count` perturbed starts.
-/// Returns the label's own patch.
+/// Warps one labelled image: the label's own parameters (or the tracker's start), then
+/// `perturb.count` starts perturbed from them. Returns the first patch.
 cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, const Perturbation& perturb,
                   std::mt19937& rng, NpyWriter& patches, std::ofstream& samples, const LandmarkTargets& targets) {
     const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
@@ -133,21 +177,23 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::normal_distribution<double> gauss(0.0, 1.0);
     cv::Mat patch, own;
-    const Eigen::Matrix3Xd landmarkShape = fit::shapeWithIdentity(targets.basis, image.identity);
+    const fit::FaceParams& base = image.start ? *image.start : label;
+    const Eigen::VectorXd& identity = image.start ? image.start_identity : image.identity;
+    const Eigen::Matrix3Xd landmarkShape = fit::shapeWithIdentity(targets.basis, identity);
     Eigen::Matrix3Xd slots;
     for (int n = 0; n <= perturb.count; ++n) {
-        fit::FaceParams start = label;
+        fit::FaceParams start = base;
         if (n > 0) {
             // Turned about the face centre, moved sideways, scaled (moved along its ray).
             Eigen::VectorXd move = Eigen::VectorXd::Zero(6);
             move.head<3>() = M_PI / 180.0 * Eigen::Vector3d(perturb.rotation_deg * sym(rng), perturb.yaw_deg * sym(rng), perturb.rotation_deg * sym(rng));
-            const Eigen::Vector3d centre = fit::rotationOf(label.omega()) * layout.centre + label.translation();
+            const Eigen::Vector3d centre = fit::rotationOf(base.omega()) * layout.centre + base.translation();
             move.segment<3>(3) = perturb.depth * sym(rng) * centre / centre.z() +
                                  Eigen::Vector3d(perturb.translation * sym(rng), perturb.translation * sym(rng), 0.0);
             cnn::applyUpdate(layout, move, start);
             for (auto& b : start.expression) b = std::clamp(b + perturb.expression_sigma * gauss(rng), 0.0, 1.0);
         }
-        const Eigen::Matrix2Xd anchors = cnn::projectAnchors(layout, image.identity, camera, start);
+        const Eigen::Matrix2Xd anchors = cnn::projectAnchors(layout, identity, camera, start);
         cnn::warpFace(layout, grey, anchors, patch);
         patches.add(patch);
         if (targets.out) {
@@ -168,39 +214,32 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
     return own;
 }
 
-/// The annotated points of a face carried to its copy at `turned` (face profiling): each
-/// point's displacement from the label's projected landmark, in patch pixels
-/// (cnn/landmark_net.hpp), kept. The jaw's projected points follow the turned silhouette.
-fit::Landmarks2d carriedLandmarks(const cnn::WarpLayout& layout, const fit::FitBasis& basis, const LabelledImage& image,
-                                  const fit::Camera& camera, const fit::FaceParams& turned) {
-    const Eigen::Matrix3Xd shape = fit::shapeWithIdentity(basis, image.identity);
-    Eigen::Matrix3Xd slots;
-    const Eigen::Matrix2d from = cnn::patchToFrame(layout, cnn::projectAnchors(layout, image.identity, camera, image.label));
-    const Eigen::VectorXd d = cnn::displacementsOf(from, cnn::projectedLandmarks(basis, shape, camera, image.label, slots), *image.landmarks);
-    return cnn::displaced(cnn::patchToFrame(layout, cnn::projectAnchors(layout, image.identity, camera, turned)),
-                          cnn::projectedLandmarks(basis, shape, camera, turned, slots), d);
-}
-
-/// Face profiling of a 300-W crop (profile::profiledCopies), each copy with its samples.
-/// Returns the copies made.
+/// Face profiling of a 300-W crop (profile::profiledCopies), each copy with its samples;
+/// with `tracker`, from its start on the copy (none: no samples). Returns the copies sampled.
 int profiledSamplesOf(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, int count,
                       const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches, std::ofstream& samples,
-                      const LandmarkTargets& targets) {
+                      const LandmarkTargets& targets, const TrackerStarts* tracker) {
     const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
     const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
     const auto copies = profile::profiledCopies(model, grey, camera, identity,
                                                 profile::nativeWeights(model, layout.anchors.expressions, image.label.expression), image.label,
                                                 count, rng);
+    int sampled = 0;
     for (const auto& copy : copies) {
         LabelledImage turned = image;
         turned.label = copy.label;
-        if (image.landmarks) turned.landmarks = carriedLandmarks(layout, targets.basis, image, camera, copy.label);
+        if (tracker && (!turned.landmarks || !(turned.start = trackerStart(*tracker, copy.image, *turned.landmarks, turned.label,
+                                                                           layout.anchors.expressions, turned.start_identity))))
+            continue;
+        if (image.landmarks)
+            turned.landmarks = profile::carriedLandmarks(layout, targets.basis, image.identity, camera, image.label, *image.landmarks, copy.label);
         char suffix[32];
         std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(copy.label.omega()).y());
         turned.key += suffix;
         samplesOf(layout, turned, copy.image, perturb, rng, patches, samples, targets);
+        ++sampled;
     }
-    return static_cast<int>(copies.size());
+    return sampled;
 }
 
 /// A frame beside its copy turned 40 deg further the way it looks, 240 px high, for the docs.
@@ -219,12 +258,13 @@ cv::Mat profiledPair(const FaceModel& model, const cnn::WarpLayout& layout, cons
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
-                             "--expression-sigma", "--profiled", "--limit", "--faces300w"},
+                             "--expression-sigma", "--profiled", "--limit", "--faces300w", "--starts-from", "--max-start-deg"},
                            {"--help", "--no-clips"});
     if (args.has("--help")) {
         std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
                   "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
-                  "       [--profiled N] [--limit N] [--faces300w DIR] [--no-clips]");
+                  "       [--profiled N] [--limit N] [--faces300w DIR] [--no-clips]\n"
+                  "       [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]");
         return 0;
     }
     const std::string labels = args.get("--labels", "build/dense_labels"), outDir = args.get("--out", "build/cnn_samples");
@@ -242,11 +282,27 @@ int run(int argc, char** argv) {
     if (perturb.count < 0 || clipPerturb.count < 0 || profiled < 0) throw Error("--perturb, --clip-perturb and --profiled must not be negative");
     std::filesystem::create_directories(outDir);
 
-    const auto model = FaceModel::load(FaceModel::defaultPath());
+    const auto model = FaceModel::loadDefault();  // with the landmark convention, as the tracker and the landmark net run
     const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), dense::labelledExpressions(model->data()));
     const auto names = layout.anchors.expressionNames(model->data());
     std::mt19937 rng(17);
     const fit::FitBasis landmarkBasis = cnn::landmarkBasis(*model, layout.anchors.expressions);
+    // With --starts-from, the starts are the tracker's answer (LBF, fit, that cascade) on each
+    // still image, with its mean identity, as the landmark net sees them at run time.
+    std::unique_ptr<Tracker> startTracker;
+    std::unique_ptr<FaceDetector> detector;
+    std::optional<TrackerStarts> tracker;
+    if (args.has("--starts-from")) {
+        DetectorConfig yunet;
+        yunet.kind = DetectorKind::YuNet;
+        detector = createFaceDetector(yunet);
+        TrackerConfig still;
+        still.filter.enabled = false;
+        const std::string from = args.get("--starts-from");
+        startTracker = std::make_unique<Tracker>(
+            Models{model, LandmarkModel::loadDefault(), nullptr, from == "fit" ? nullptr : CnnModel::load(from)}, still);
+        tracker.emplace(TrackerStarts{*startTracker, *detector, args.number("--max-start-deg", 180.0)});
+    }
     {
         std::ofstream mirror(outDir + "/landmarks_mirror.txt");  // for the trainer's mirrored samples
         for (const int m : tools::kMirror68) mirror << m << '\n';
@@ -265,7 +321,12 @@ int run(int argc, char** argv) {
         out << '\n';
     };
     auto labelled = [](const dense::LabelColumns& c, const dense::LabelTable::Row& row) {
-        return LabelledImage{row.key, row.split, dense::labelParams(c, row), dense::labelIdentity(c, row), std::nullopt};
+        LabelledImage image;
+        image.key = row.key;
+        image.split = row.split;
+        image.label = dense::labelParams(c, row);
+        image.identity = dense::labelIdentity(c, row);
+        return image;
     };
     // 300-W crops.
     {
@@ -288,9 +349,10 @@ int run(int argc, char** argv) {
             const core::Shape2 points = core::readPts(root + "/" + key.substr(0, key.rfind('.')) + ".pts");
             if (points.cols() != model::kLandmarkCount) throw Error(key + ": its .pts does not have 68 points");
             image.landmarks = points.cast<double>();
-            samplesOf(layout, image, grey, perturb, rng, patches, samples, {landmarkBasis, &landmarks});
+            if (!tracker || (image.start = trackerStart(*tracker, grey, *image.landmarks, image.label, layout.anchors.expressions, image.start_identity)))
+                samplesOf(layout, image, grey, perturb, rng, patches, samples, {landmarkBasis, &landmarks});
             profiledFaces += profiledSamplesOf(*model, layout, image, grey, profiled, perturb, rng, profiledPatches, profiledSamples,
-                                               {landmarkBasis, &profiledLandmarks});
+                                               {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
             if ((i + 1) % 20 == 0) std::fprintf(stderr, "\r300-W: %zu / %zu", i + 1, table.rows.size());
         }
         patches.finish();

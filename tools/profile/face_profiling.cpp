@@ -1,5 +1,6 @@
 #include "profile/face_profiling.hpp"
 
+#include "cnn/landmark_net.hpp"
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
 
@@ -223,6 +224,17 @@ ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fi
     const double head = static_cast<double>(cv::countNonZero(hidden < 2));
     out.hidden_share = head > 0 ? cv::countNonZero(holes) / head : 0.0;
     return out;
+}
+
+fit::Landmarks2d carriedLandmarks(const cnn::WarpLayout& layout, const fit::FitBasis& basis, const Eigen::VectorXd& identity,
+                                  const fit::Camera& camera, const fit::FaceParams& label, const fit::Landmarks2d& landmarks,
+                                  const fit::FaceParams& turned) {
+    const Eigen::Matrix3Xd shape = fit::shapeWithIdentity(basis, identity);
+    Eigen::Matrix3Xd slots;
+    const Eigen::Matrix2d from = cnn::patchToFrame(layout, cnn::projectAnchors(layout, identity, camera, label));
+    const Eigen::VectorXd d = cnn::displacementsOf(from, cnn::projectedLandmarks(basis, shape, camera, label, slots), landmarks);
+    return cnn::displaced(cnn::patchToFrame(layout, cnn::projectAnchors(layout, identity, camera, turned)),
+                          cnn::projectedLandmarks(basis, shape, camera, turned, slots), d);
 }
 
 }  // namespace facetrack::profile

@@ -21,8 +21,10 @@
 // that was hidden; turning it back across the front reveals its far side,
 // mostly holes.
 
+#include "cnn/face_warp.hpp"
 #include "facetrack/face_model.hpp"
 #include "fit/camera.hpp"
+#include "fit/face_fitter.hpp"
 #include "fit/pose.hpp"
 
 #include <opencv2/core.hpp>
@@ -62,6 +64,14 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
 /// Native expression weights (FaceModel::expressionNames() order) from weights
 /// of the expressions `ids` (indices into those names); the others 0.
 std::vector<float> nativeWeights(const FaceModel& model, const std::vector<int>& ids, const Eigen::VectorXd& weights);
+
+/// A photograph's annotated 68 points carried to its copy at `turned`: each
+/// point keeps its displacement from the label's projected landmark in patch
+/// pixels (cnn/landmark_net.hpp); the jaw's projected points follow the
+/// turned silhouette. `basis`: cnn::landmarkBasis for the label's expressions.
+fit::Landmarks2d carriedLandmarks(const cnn::WarpLayout& layout, const fit::FitBasis& basis, const Eigen::VectorXd& identity,
+                                  const fit::Camera& camera, const fit::FaceParams& label, const fit::Landmarks2d& landmarks,
+                                  const fit::FaceParams& turned);
 
 /// The pose turned by `yawDeg` about the camera's vertical axis through the
 /// model origin: R' = R_y(yaw) R, t' = t.

@@ -27,6 +27,14 @@ import torch
 torch.set_flush_denormal(True)  # about 9x faster for small nets on this CPU
 
 
+def load_all(loader, samples, name, splits):
+    """`loader`'s sets from each of the comma-separated sample folders, concatenated."""
+    parts = [t for t in (loader(d, name, splits) for d in samples.split(",")) if t is not None and len(t[0])]
+    if not parts:
+        return None
+    return torch.cat([t[0] for t in parts]), torch.cat([t[1] for t in parts]), parts[0][2]
+
+
 def read_csv(path):
     with open(path) as f:
         rows = list(csv.reader(f))
@@ -139,7 +147,7 @@ class Stage(torch.nn.Module):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--samples", default="build/cnn_samples")
+    p.add_argument("--samples", default="build/cnn_samples", help="make_cnn_samples' folder, or several, comma-separated")
     p.add_argument("--out", default="build/cnn/stage1")
     p.add_argument("--minutes", type=float, default=30)
     p.add_argument("--batch", type=int, default=128)
@@ -153,7 +161,7 @@ def main():
     os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
 
     loader = load_landmarks if a.landmarks else load
-    faces, profiled, clips = (loader(a.samples, n, {"train"}) for n in ("faces300w", "profiled", "clips"))
+    faces, profiled, clips = (load_all(loader, a.samples, n, {"train"}) for n in ("faces300w", "profiled", "clips"))
     sets = [t for t in (faces, profiled, clips) if t is not None]
     columns = faces[2]
     x_train = torch.cat([t[0] for t in sets])
@@ -162,14 +170,14 @@ def main():
     n_clips = len(clips[0]) if clips is not None else 0
     validation = {}
     for name in ("faces300w", "profiled"):
-        v = loader(a.samples, name, {"validation"})
+        v = load_all(loader, a.samples, name, {"validation"})
         if v is None or len(v[0]) == 0:
             continue
         if not a.landmarks:  # the label's own patches count in training, not in these figures
             perturbed = v[1][:, :6].abs().sum(1) > 0
             v = (v[0][perturbed], v[1][perturbed])
         validation[name] = (standardise(v[0]), v[1])
-    flip_order, flip_sign = landmark_mirror_permutation(a.samples, columns) if a.landmarks else mirror_permutation(columns)
+    flip_order, flip_sign = landmark_mirror_permutation(a.samples.split(",")[0], columns) if a.landmarks else mirror_permutation(columns)
     # The net regresses each output over its spread on the training targets (about 9x faster
     # to train than raw radians and depth fractions of very different sizes; export folds the
     # spread back in); the loss weighs outputs alike within pose and within expressions, the

@@ -47,4 +47,12 @@ float nme68(const Shape2& predicted, const Shape2& truth) {
     return (predicted - truth).colwise().norm().mean() / interocular;
 }
 
+float nmeBox(const Shape2& predicted, const Shape2& truth) {
+    if (predicted.cols() != truth.cols() || truth.cols() == 0) throw Error("nmeBox: shapes must have the same, non-zero number of points");
+    const Eigen::Vector2f size = truth.rowwise().maxCoeff() - truth.rowwise().minCoeff();
+    const float scale = std::sqrt(size.x() * size.y());
+    if (!(scale > 0.f)) throw Error("nmeBox: the truth's points have an empty box");
+    return (predicted - truth).colwise().norm().mean() / scale;
+}
+
 }  // namespace facetrack::core

@@ -62,4 +62,8 @@ inline float eyeCornerDistance(const Landmarks68& p) { return std::hypot(p[36].x
 /// distance (0-based points 36 and 45). Both shapes have 68 points.
 float nme68(const Shape2& predicted, const Shape2& truth);
 
+/// Box-normalised mean error (AFLW2000-3D, large poses, where the eye corners
+/// can coincide): mean point distance over sqrt(w h) of the truth's bounding box.
+float nmeBox(const Shape2& predicted, const Shape2& truth);
+
 }  // namespace facetrack::core
