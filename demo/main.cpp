@@ -124,7 +124,7 @@ int run(int argc, char** argv) {
     }
     std::cerr << "facetrack_demo: " << reader.describe() << '\n';
 
-    Tracker tracker(Models::loadDefault(), tools::trackerConfig(args));
+    Tracker tracker(tools::trackingModels(args), tools::trackerConfig(args));
     tools::MediaFrame frame;
     if (!reader.next(frame)) throw Error("no frames in " + reader.describe());
     cv::Mat shown = frame.bgr.clone();

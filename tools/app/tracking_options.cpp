@@ -32,6 +32,15 @@ TrackerConfig trackerConfig(const Args& args) {
     return config;
 }
 
+Models trackingModels(const Args& args) {
+    Models models = Models::loadDefault();
+    if (args.has("--cnn")) {
+        const std::string cnn = args.get("--cnn");
+        models.cnn = cnn == "none" ? nullptr : CnnModel::load(cnn);
+    }
+    return models;
+}
+
 std::set<std::string> trackingOptions(std::set<std::string> more) {
     more.insert(kDetectorOptions.begin(), kDetectorOptions.end());
     more.insert(kTrackerOptions.begin(), kTrackerOptions.end());

@@ -33,7 +33,7 @@ int runBench(const std::vector<std::string>& argv) {
     if (args.positional().size() != 1) throw Error("give one clip (see --help)");
     const std::string clip = args.positional()[0];
     const auto frames = readAllFrames(clip, static_cast<int>(args.number("--frames", -1)), parseSize(args.get("--size")));
-    Tracker tracker(Models::loadDefault(), trackerConfig(args));
+    Tracker tracker(trackingModels(args), trackerConfig(args));
 
     std::vector<std::string> stageOrder;
     std::map<std::string, std::vector<double>> perStage;  // ms per frame, 0 when the stage did not run

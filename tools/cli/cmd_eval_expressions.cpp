@@ -95,10 +95,10 @@ struct Track {
 };
 
 /// `neutralAt` >= 0: Tracker::calibrateNeutral() after that frame.
-Track trackClip(const std::string& path, const TrackerConfig& config, bool mirrored, int neutralAt) {
+Track trackClip(const std::string& path, const Models& models, const TrackerConfig& config, bool mirrored, int neutralAt) {
     cv::VideoCapture video(path);
     if (!video.isOpened()) throw Error("cannot open clip " + path);
-    Tracker tracker(Models::loadDefault(), config);
+    Tracker tracker(models, config);
     Track t;
     cv::Mat bgr;
     FrameResult result;
@@ -278,6 +278,7 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
             if (std::find(clips.begin(), clips.end(), s.clip) == clips.end()) clips.push_back(s.clip);
     }
     const TrackerConfig config = trackerConfig(args);
+    const Models models = trackingModels(args);
     const std::string prefix = args.get("--plot", "expressions");
 
     // With --calibrate-neutral, each clip's first neutral segment's first frame calibrates, and is
@@ -291,8 +292,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     std::map<std::string, Track> tracks, mirrored;
     for (const auto& clip : clips) {
         const int at = calibrating.count(clip) ? calibrating[clip]->first : -1;
-        tracks[clip] = trackClip(shared + "/data/clips/" + clip, config, false, at);
-        if (!args.has("--no-mirror")) mirrored[clip] = trackClip(shared + "/data/clips/" + clip, config, true, at);
+        tracks[clip] = trackClip(shared + "/data/clips/" + clip, models, config, false, at);
+        if (!args.has("--no-mirror")) mirrored[clip] = trackClip(shared + "/data/clips/" + clip, models, config, true, at);
     }
     if (calibrate) std::printf("neutral calibrated at the first frame of each clip's first neutral segment (%zu clips)\n", calibrating.size());
     const auto neutralFigures = reportSegments(segments, tracks, calibrating);
@@ -342,7 +343,7 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
 
     std::map<std::string, std::array<float, kArkitBlendshapeCount>> dense;
     if (args.has("--dense")) {
-        dense = readDenseLabels(args.get("--dense"), *Models::loadDefault().face);
+        dense = readDenseLabels(args.get("--dense"), *models.face);
         std::array<std::vector<double>, kArkitBlendshapeCount> ours, theirs;
         for (const auto& clip : clips) {
             const Track& t = tracks[clip];

@@ -74,7 +74,7 @@ int runEvalTrack(const std::vector<std::string>& argv) {
     }
     if (args.positional().empty()) throw Error("give at least one clip (see --help)");
     const TrackerConfig config = trackerConfig(args);
-    const auto models = Models::loadDefault();
+    const auto models = trackingModels(args);
     const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
     std::optional<dlib::shape_predictor> predictor;
     if (dlibPath != "none") {

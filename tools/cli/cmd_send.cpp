@@ -76,7 +76,7 @@ int runSend(const std::vector<std::string>& argv) {
     std::optional<int> listenPort;
     if (args.has("--listen-port")) listenPort = static_cast<int>(args.number("--listen-port", 0));
 
-    Models models = Models::loadDefault();
+    Models models = trackingModels(args);
     send::Sender sender(protocol, args.get("--to", "127.0.0.1"), models.face, listenPort);
     AsyncOptions options;
     options.realtime = !args.has("--fast");

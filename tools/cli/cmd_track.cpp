@@ -154,7 +154,7 @@ int runTrack(const std::vector<std::string>& argv) {
 
     std::string inputName;
     auto reader = openInput(args, inputName);
-    Tracker tracker(Models::loadDefault(), config);
+    Tracker tracker(trackingModels(args), config);
     std::cerr << "facetrack: tracking " << inputName << '\n';
 
     std::ofstream file;
