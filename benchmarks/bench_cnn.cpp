@@ -9,17 +9,14 @@
 #include "cnn/cnn_stage.hpp"
 #include "facetrack/facetrack.hpp"
 
-#include <cstdlib>
-#include <filesystem>
 
 namespace facetrack::bench {
 namespace {
 
 void BM_Cnn_Stage(benchmark::State& state) {
-    const char* given = std::getenv("FACETRACK_CNN_CASCADE");
-    const std::string path = given ? given : CnnModel::defaultPath();
-    if (!std::filesystem::exists(path)) {
-        state.SkipWithError(("no CNN cascade at " + path + " (set FACETRACK_CNN_CASCADE)").c_str());
+    const std::string path = benchCascadePath();
+    if (path.empty()) {
+        state.SkipWithError(("no CNN cascade at " + CnnModel::defaultPath() + " (set FACETRACK_CNN_CASCADE)").c_str());
         return;
     }
     Models models = Models::loadDefault();

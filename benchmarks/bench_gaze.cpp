@@ -46,6 +46,8 @@ void BM_TrackingFrame640x480_d14(benchmark::State& state) {
     if (skipWithoutShared(state, frames.empty() ? cv::Mat() : frames[0])) return;
     Models models = Models::loadDefault();
     if (state.range(0) == 0) models.eyes = nullptr;
+    const std::string cascade = benchCascadePath();  // with FACETRACK_CNN_CASCADE: the frame with the cnn stage
+    models.cnn = cascade.empty() ? nullptr : CnnModel::load(cascade);
     Tracker tracker(models);
     FrameResult result;
     std::size_t t = 0;
@@ -56,7 +58,7 @@ void BM_TrackingFrame640x480_d14(benchmark::State& state) {
         tracker.process(core::viewOf(frames[index]), t / 30.0, result);
         ++t;
     }
-    state.SetLabel(state.range(0) ? "gaze on" : "gaze off");
+    state.SetLabel(std::string(state.range(0) ? "gaze on" : "gaze off") + (models.cnn ? ", cnn on" : ""));
 }
 BENCHMARK(BM_TrackingFrame640x480_d14)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 

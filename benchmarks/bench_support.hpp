@@ -3,11 +3,14 @@
 
 #include "pipeline/stage.hpp"
 
+#include "facetrack/cnn_model.hpp"
 #include "facetrack/tracker.hpp"
 
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
+#include <cstdlib>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -31,6 +34,14 @@ struct TrackedFrame {
 };
 
 /// Empty (and the benchmark marked skipped) without ../shared or a face.
+/// The CNN cascade to measure: FACETRACK_CNN_CASCADE when set, else the shipped one; its path,
+/// or "" when neither exists.
+inline std::string benchCascadePath() {
+    const char* given = std::getenv("FACETRACK_CNN_CASCADE");
+    const std::string path = given ? given : CnnModel::defaultPath();
+    return std::filesystem::exists(path) ? path : "";
+}
+
 std::optional<TrackedFrame> trackedFrame(benchmark::State& state, const Models& models, const std::string& clip, int index);
 
 }  // namespace facetrack::bench
