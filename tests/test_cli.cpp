@@ -1,5 +1,6 @@
 // Runs the installed-to-be `facetrack` binary as a user would.
 
+#include "cnn/cnn_model_data.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -10,6 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <iterator>
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -151,6 +154,54 @@ TEST(Cli, EvalExpressionsReportsNeutralAndResponsesAndRejectsBadLabels) {
     EXPECT_EQ(rejected.exit_code, 1);
     EXPECT_NE(rejected.err.find("unknown label 'grin'"), std::string::npos) << rejected.err;
     std::filesystem::remove(bad);
+}
+
+}  // namespace
+}  // namespace facetrack
+
+namespace facetrack {
+namespace {
+
+TEST(Cli, LandmarksComeFromThePipelineWithACascadesLandmarkNetAndFromLbfWithLbfOnly) {
+    FACETRACK_REQUIRE_SHARED();
+    // The cascade of the export fixtures: a random stage and a landmark net moving every point
+    // by (+3, 0) patch pixels (tools/train_cnn/make_parity_fixture.py): wiring, not accuracy.
+    const auto bytes = [](const std::string& name) {
+        std::ifstream in(test::sourceDir() + "/tests/data/" + name, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    };
+    cnn::CnnModelData cascade;
+    cascade.expressions = {"jawOpen"};
+    cascade.stages.push_back({1, bytes("cnn_parity.onnx")});
+    cascade.landmark_net = bytes("cnn_landmarks_fixture.onnx");
+    const std::string cascadePath = test::tempPath("cli_cascade.ftm");
+    cnn::writeCnnModel(cascadePath, cascade);
+    const std::string image = test::tempPath("cli_landmarks.png");
+    ASSERT_TRUE(cv::imwrite(image, test::clipFrames(1).at(0)));
+
+    const CliRun pipeline = runCli("landmarks '" + image + "' --cascade '" + cascadePath + "'");
+    const CliRun lbf = runCli("landmarks '" + image + "' --cascade '" + cascadePath + "' --lbf-only");
+    ASSERT_EQ(pipeline.exit_code, 0) << pipeline.err;
+    ASSERT_EQ(lbf.exit_code, 0) << lbf.err;
+    const auto a = jsonLines(pipeline.out), b = jsonLines(lbf.out);
+    ASSERT_EQ(a.size(), 1u);
+    ASSERT_EQ(b.size(), 1u);
+    EXPECT_EQ(a[0]["method"], "facetrack LBF + fit + CNN");
+    EXPECT_EQ(b[0]["method"], "facetrack LBF");
+    ASSERT_EQ(a[0]["faces"].size(), 1u);
+    ASSERT_EQ(b[0]["faces"].size(), 1u);
+    const auto& pa = a[0]["faces"][0]["landmarks"];
+    const auto& pb = b[0]["faces"][0]["landmarks"];
+    ASSERT_EQ(pa.size(), 68u);
+    double moved = 0.0;
+    for (int i = 0; i < 68; ++i) {
+        moved += std::hypot(pa[i][0].get<double>() - pb[i][0].get<double>(), pa[i][1].get<double>() - pb[i][1].get<double>());
+        EXPECT_TRUE(std::isfinite(pa[i][0].get<double>()) && std::isfinite(pa[i][1].get<double>()));
+    }
+    EXPECT_GT(moved / 68.0, 1.0);  // the net's points (after the random stage's pose), not LBF's
+
+    const CliRun noNet = runCli("landmarks '" + image + "' --cascade '" + test::tempPath("no_such.ftm") + "'");
+    EXPECT_NE(noNet.exit_code, 0);
 }
 
 }  // namespace
