@@ -144,6 +144,8 @@ int run(int argc, char** argv) {
     yunet.kind = DetectorKind::YuNet;
     const auto detector = createFaceDetector(yunet);
     LandmarkErrors cropLbf, cropFull;
+    // The real crops (no profiling) by the label's |yaw|: 0-15, 15-30, 30-45, over 45 deg.
+    std::vector<LandmarkErrors> cropBinLbf(4), cropBinFull(4);
     std::vector<LandmarkErrors> binLbf(kBins), binFull(kBins);
     cnn::RefineWork work;
     const auto record = [&](std::vector<RoundErrors>& errors, int round, const fit::FaceParams& params, const fit::FaceParams& label) {
@@ -219,7 +221,15 @@ int run(int argc, char** argv) {
         const core::Shape2 annotated = core::readPts(root + "/" + row.key.substr(0, row.key.rfind('.')) + ".pts");
         if (annotated.cols() != 68) throw Error(row.key + ": its .pts does not have 68 points");
         const fit::Landmarks2d points = annotated.cast<double>();
+        const auto cropBin = static_cast<std::size_t>(std::min(3, static_cast<int>(std::abs(fit::eulerDegrees(label.omega()).y()) / 15.0)));
+        const std::size_t before = cropLbf.box_nme.size();
         if (!evaluate(grey, label, points, rounds, fromFit, cropLbf, cropFull)) ++unfitted;
+        if (cropLbf.box_nme.size() > before) {  // this crop's landmark errors, into its yaw bin too
+            for (auto [all, bin] : {std::pair{&cropLbf, &cropBinLbf[cropBin]}, std::pair{&cropFull, &cropBinFull[cropBin]}}) {
+                bin->eye_corner_nme.push_back(all->eye_corner_nme.back());
+                bin->box_nme.push_back(all->box_nme.back());
+            }
+        }
         if (profiledTries > 0) {
             const std::vector<float> identity(labelIdentity.data(), labelIdentity.data() + labelIdentity.size());
             for (const auto& copy : profile::profiledCopies(*model, grey, camera, identity,
@@ -243,6 +253,12 @@ int run(int argc, char** argv) {
     for (int i = 0; i <= iterations; ++i) report(i == 0 ? "fit" : ("round " + std::to_string(i)).c_str(), fromFit[static_cast<std::size_t>(i)]);
     reportLandmarks("LBF", cropLbf);
     reportLandmarks("LBF + fit + CNN", cropFull);
+    for (std::size_t b = 0; b < 4; ++b) {
+        if (cropBinLbf[b].box_nme.empty()) continue;
+        std::printf("crops with label |yaw| %s deg:\n", b == 3 ? "over 45" : (std::to_string(15 * b) + "-" + std::to_string(15 * b + 15)).c_str());
+        reportLandmarks("  LBF", cropBinLbf[b]);
+        reportLandmarks("  LBF + fit + CNN", cropBinFull[b]);
+    }
     for (int bin = 0; bin < kBins; ++bin) {
         if (binFaces[static_cast<std::size_t>(bin)] == 0) continue;
         std::printf("profiled, |yaw| %d-%d deg: %d faces (%d without a YuNet box or a fitted face)\n", 15 * (bin + 1), 15 * (bin + 2),
