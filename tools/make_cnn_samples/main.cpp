@@ -228,11 +228,11 @@ int profiledSamplesOf(const FaceModel& model, const cnn::WarpLayout& layout, con
     for (const auto& copy : copies) {
         LabelledImage turned = image;
         turned.label = copy.label;
+        if (image.landmarks)
+            turned.landmarks = profile::carriedLandmarks(layout, targets.basis, image.identity, camera, image.label, *image.landmarks, copy.label);
         if (tracker && (!turned.landmarks || !(turned.start = trackerStart(*tracker, copy.image, *turned.landmarks, turned.label,
                                                                            layout.anchors.expressions, turned.start_identity))))
             continue;
-        if (image.landmarks)
-            turned.landmarks = profile::carriedLandmarks(layout, targets.basis, image.identity, camera, image.label, *image.landmarks, copy.label);
         char suffix[32];
         std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(copy.label.omega()).y());
         turned.key += suffix;
