@@ -50,5 +50,18 @@ TEST(Shape2d, NmeIsMeanErrorOverOuterEyeCornerDistance) {
     EXPECT_NEAR(nme68(predicted, truth), 0.03f, 1e-6f);
 }
 
+TEST(Shape2d, BoxNmeIsMeanErrorOverTheTruthsBoxSize) {
+    Shape2 truth = Shape2::Zero(2, 68);
+    truth.col(0) = Eigen::Vector2f(10.f, 20.f);
+    truth.col(1) = Eigen::Vector2f(110.f, 20.f);
+    truth.col(2) = Eigen::Vector2f(60.f, 420.f);  // box 100 x 400: sqrt(w h) = 200
+    for (int i = 3; i < 68; ++i) truth.col(i) = Eigen::Vector2f(60.f, 100.f);
+    Shape2 predicted = truth;
+    predicted.row(1).array() += 4.f;
+    EXPECT_NEAR(nmeBox(predicted, truth), 0.02f, 1e-6f);
+    EXPECT_THROW(nmeBox(predicted, Shape2::Zero(2, 68)), Error);  // an empty box
+    EXPECT_THROW(nmeBox(predicted.leftCols(5), truth), Error);
+}
+
 }  // namespace
 }  // namespace facetrack::core
