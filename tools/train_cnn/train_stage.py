@@ -196,8 +196,11 @@ def main():
     opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
     epoch, started, best = 0, time.time(), float("inf")
     if a.export_only:
-        net.load_state_dict(torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))["net"])
-        export(net, a.out + ".onnx", scale, output_name)
+        state = torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))
+        net.load_state_dict(state["net"])
+        # The spread the net was trained with (older checkpoints lack it: then the given samples' own,
+        # which must be the training run's --samples).
+        export(net, a.out + ".onnx", state.get("scale", scale), output_name)
         write_columns(a.out, columns)
         print(f"wrote {a.out}.onnx", flush=True)
         return
@@ -259,10 +262,10 @@ def main():
                          f"centre {shift_before:.2f} -> {shift_after:.2f} % of depth, expression MAE {expr_before:.4f} -> {expr_after:.4f};")
         line += f" {time.time() - started:.0f} s"
         print(line, flush=True); log.write(line + "\n"); log.flush()
-        torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best}, a.out + ".pt")
+        torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best, "scale": scale}, a.out + ".pt")
         if score < best:  # the net that exports: the best on the validation crops (the test crops choose nothing)
             best = score
-            torch.save({"net": net.state_dict(), "epoch": epoch}, a.out + ".best.pt")
+            torch.save({"net": net.state_dict(), "epoch": epoch, "scale": scale}, a.out + ".best.pt")
     if os.path.exists(a.out + ".best.pt"):
         net.load_state_dict(torch.load(a.out + ".best.pt")["net"])
     net.eval()
