@@ -123,9 +123,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             bool lost = false;
             const Landmarks68 points = pipeline->of(bgr, gray, box, &lost);
             dropped += lost;
-            Shape2 s(2, 68);
-            for (int i = 0; i < 68; ++i) s.col(i) = Eigen::Vector2f(points[static_cast<std::size_t>(i)].x, points[static_cast<std::size_t>(i)].y);
-            return s;
+            return Shape2(landmarks::fromLandmarks68(points));
         });
     }
     methods.push_back(ourLbf(lbf));

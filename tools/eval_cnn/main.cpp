@@ -32,6 +32,7 @@
 #include "common/faces300w.hpp"
 #include "core/pts.hpp"
 #include "core/shape2d.hpp"
+#include "landmarks/lbf.hpp"
 #include "dense/dense_fit.hpp"
 #include "dense/label_table.hpp"
 #include "facetrack/cnn_model.hpp"
@@ -172,11 +173,7 @@ int run(int argc, char** argv) {
         // One image: `starts` perturbed starts, and the tracker's LBF + fit, each through the cascade.
         const auto landmarkErrors = [&](const cv::Mat& image, const Box& box, const fit::Landmarks2d& points, LandmarkErrors& ofLbf,
                                         LandmarkErrors& ofFull) {
-            const auto shape = [](const Landmarks68& l) {
-                core::Shape2 s(2, 68);
-                for (int k = 0; k < 68; ++k) s.col(k) << l[static_cast<std::size_t>(k)].x, l[static_cast<std::size_t>(k)].y;
-                return s;
-            };
+            const auto shape = [](const Landmarks68& l) { return core::Shape2(landmarks::fromLandmarks68(l)); };
             const core::Shape2 truthShape = points.cast<float>();
             const core::Shape2 fromLbf = shape(*result.faces[0].landmarks);
             full->reset();
@@ -210,10 +207,8 @@ int run(int argc, char** argv) {
             lbf.process(view, 0.0, {*box}, result);
             if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) return false;
             if (full) landmarkErrors(image, *box, points, ofLbf, ofFull);
-            fit::FaceParams start = truth;
-            fit::poseParamsOf(*result.faces[0].pose, start);
-            for (std::size_t k = 0; k < expressionIds.size(); ++k)
-                start.expression[static_cast<Eigen::Index>(k)] = result.faces[0].expression->native[static_cast<std::size_t>(expressionIds[k])];
+            fit::FaceParams start;
+            cnn::readParams(*result.faces[0].pose, result.faces[0].expression->native, expressionIds, start);
             work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
             cascadeFrom(start, truth, image, camera, fitted);
             return true;

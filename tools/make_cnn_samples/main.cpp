@@ -146,10 +146,7 @@ std::optional<fit::FaceParams> trackerStart(const TrackerStarts& from, const cv:
     if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) return std::nullopt;
     const FaceResult& face = result.faces[0];
     fit::FaceParams start;
-    fit::poseParamsOf(*face.pose, start);
-    start.expression.resize(static_cast<Eigen::Index>(expressions.size()));
-    for (std::size_t k = 0; k < expressions.size(); ++k)
-        start.expression[static_cast<Eigen::Index>(k)] = face.expression->native[static_cast<std::size_t>(expressions[k])];
+    cnn::readParams(*face.pose, face.expression->native, expressions, start);
     identity = Eigen::Map<const Eigen::VectorXf>(face.identity.data(), static_cast<Eigen::Index>(face.identity.size())).cast<double>();
     const double offDeg = Eigen::AngleAxisd(fit::rotationOf(start.omega()) * fit::rotationOf(label.omega()).transpose()).angle() * 180.0 / M_PI;
     if (offDeg > from.max_deg) return std::nullopt;

@@ -70,7 +70,7 @@ public:
             if (landmark_net_) s.landmark_identity_shape = fit::shapeWithIdentity(landmark_basis_, a);
             s.shaped = true;
         }
-        readParams(*r.pose, r.expression->native, s.params);
+        readParams(*r.pose, r.expression->native, layout_.anchors.expressions, s.params);
         const auto& stages = cascade_->data().stages;
         for (std::size_t i = 0; i < nets_.size(); ++i) {
             if (!refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work)) return true;  // keep the fit's answer
@@ -105,15 +105,6 @@ private:
             bounds = {std::min(bounds.x0, x), std::min(bounds.y0, y), std::max(bounds.x1, x), std::max(bounds.y1, y)};
         }
         face.locate(bounds);
-    }
-
-    /// The fit's public pose and weights as the cascade's parameters.
-    void readParams(const HeadPose& pose, const std::vector<float>& native, fit::FaceParams& p) const {
-        fit::poseParamsOf(pose, p);
-        for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
-            const auto j = static_cast<std::size_t>(layout_.anchors.expressions[k]);
-            p.expression[static_cast<Eigen::Index>(k)] = j < native.size() ? native[j] : 0.0;
-        }
     }
 
     std::shared_ptr<const CnnModel> cascade_;

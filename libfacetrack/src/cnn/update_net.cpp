@@ -12,6 +12,15 @@ Eigen::Vector3d centreOf(const WarpLayout& layout, const fit::FaceParams& p) {
 }
 }  // namespace
 
+void readParams(const HeadPose& pose, const std::vector<float>& native, const std::vector<int>& expressions, fit::FaceParams& params) {
+    fit::poseParamsOf(pose, params);
+    params.expression.resize(static_cast<Eigen::Index>(expressions.size()));
+    for (std::size_t k = 0; k < expressions.size(); ++k) {
+        const auto j = static_cast<std::size_t>(expressions[k]);
+        params.expression[static_cast<Eigen::Index>(k)] = j < native.size() ? native[j] : 0.0;
+    }
+}
+
 Eigen::VectorXd updateBetween(const WarpLayout& layout, const fit::FaceParams& start, const fit::FaceParams& face) {
     Eigen::VectorXd u(6 + start.expression.size());
     const Eigen::AngleAxisd turn(fit::rotationOf(face.omega()) * fit::rotationOf(start.omega()).transpose());

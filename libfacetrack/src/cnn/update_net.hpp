@@ -17,6 +17,11 @@
 
 namespace facetrack::cnn {
 
+/// A tracked face's public pose and native weights as the cascade's parameters: `expressions`
+/// (indices into the native weights, the layout's order; one missing from `native` reads 0).
+/// No allocation once params.expression has their size.
+void readParams(const HeadPose& pose, const std::vector<float>& native, const std::vector<int>& expressions, fit::FaceParams& params);
+
 /// The update u(start -> face) defined above.
 Eigen::VectorXd updateBetween(const WarpLayout& layout, const fit::FaceParams& start, const fit::FaceParams& face);
 
