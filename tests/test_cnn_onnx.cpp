@@ -50,18 +50,11 @@ TEST(CnnExport, OpenCvDnnMatchesTorchOnStoredInputs) {
 /// A cascade of the parity fixture's net (random weights; 6 pose + 1 expression outputs): for
 /// the file format and the wiring, not for accuracy.
 cnn::CnnModelData parityCascade() {
-    std::ifstream in(test::sourceDir() + "/tests/data/cnn_parity.onnx", std::ios::binary);
     cnn::CnnModelData m;
     m.expressions = {"jawOpen"};
-    m.stages.push_back({2, std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>())});
+    m.stages.push_back({2, test::fixtureBytes("cnn_parity.onnx")});
     m.provenance = "the export parity fixture";
     return m;
-}
-
-std::string fixtureBytes(const std::string& name) {
-    std::ifstream in(test::sourceDir() + "/tests/data/" + name, std::ios::binary);
-    EXPECT_TRUE(in) << name;
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
@@ -75,7 +68,7 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     EXPECT_EQ(loaded->provenance(), m.provenance);
     EXPECT_FALSE(loaded->hasLandmarkNet());
     cnn::CnnModelData withLandmarks = m;
-    withLandmarks.landmark_net = fixtureBytes("cnn_landmarks_fixture.onnx");
+    withLandmarks.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     cnn::writeCnnModel(test::tempPath("cascade_landmarks.ftm"), withLandmarks);
     const auto reloaded = CnnModel::load(test::tempPath("cascade_landmarks.ftm"));
     EXPECT_TRUE(reloaded->hasLandmarkNet());
@@ -200,7 +193,7 @@ TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
     // The fixture's net displaces every point by (+3, 0) patch pixels: the stage's landmarks must be
     // the projection of its own refined face, each moved by L (3, 0).
     cnn::CnnModelData m = parityCascade();
-    m.landmark_net = fixtureBytes("cnn_landmarks_fixture.onnx");
+    m.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     const std::string path = test::tempPath("cascade_landmark_stage.ftm");
     cnn::writeCnnModel(path, m);
     Models models = Models::loadDefault();

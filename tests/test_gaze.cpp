@@ -8,7 +8,9 @@
 #include "gaze/forest_training.hpp"
 #include "gaze/gaze_fit.hpp"
 #include "gaze/gaze_stage.hpp"
+#include "gaze/iris_net.hpp"
 
+#include "core/binary_io.hpp"
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"
 #include "test_support.hpp"
@@ -156,6 +158,76 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     bad.closed_aperture = bad.open_aperture + 0.1f;
     EXPECT_THROW(writeEyeModel(copy, bad), Error);
     std::filesystem::remove(copy);
+}
+
+/// The fixture net scores each cell by its own patch pixel (2i, 2j) alone, (0, 0, 4 v):
+/// P(iris) = e^(4v) / (2 + e^(4v)), P(open) = (1 + e^(4v)) / (2 + e^(4v)).
+TEST(IrisNet, ReadsEachRegionCellFromItsOwnPatchPixel) {
+    IrisNet net(test::fixtureBytes("iris_net_fixture.onnx"), "the fixture");
+    cv::Mat left(kPatchHeight, kPatchWidth, CV_32F), right(kPatchHeight, kPatchWidth, CV_32F);
+    for (int y = 0; y < kPatchHeight; ++y)
+        for (int x = 0; x < kPatchWidth; ++x) {
+            left.at<float>(y, x) = 0.02f * static_cast<float>(x) - 0.4f;
+            right.at<float>(y, x) = 0.5f - 0.03f * static_cast<float>(y);
+        }
+    const PatchRegion r = kClassifiedRegion;
+    std::array<cv::Mat, 2> iris, open;
+    for (auto* maps : {&iris, &open})
+        for (cv::Mat& m : *maps) m = cv::Mat(r.rows(), r.columns(), CV_32F, cv::Scalar(-1.f));
+    net.classify({&left, &right}, {&iris[0], &iris[1]}, {&open[0], &open[1]});
+    for (int e = 0; e < 2; ++e)
+        for (int j = 0; j < r.rows(); ++j)
+            for (int i = 0; i < r.columns(); ++i) {
+                const float v = (e == 0 ? left : right).at<float>(r.y(j), r.x(i));
+                const float k = std::exp(4.f * v);
+                EXPECT_NEAR(iris[e].at<float>(j, i), k / (2.f + k), 1e-5f) << "eye " << e << " cell " << i << ", " << j;
+                EXPECT_NEAR(open[e].at<float>(j, i), (1.f + k) / (2.f + k), 1e-5f);
+            }
+    // An eye that was not cut is left alone.
+    iris[1].setTo(-1.f);
+    net.classify({&left, nullptr}, {&iris[0], &iris[1]}, {&open[0], &open[1]});
+    EXPECT_EQ(iris[1].at<float>(0, 0), -1.f);
+    EXPECT_THROW(IrisNet("not an onnx file", "junk"), Error);
+    // A net of the wrong output size: the cascade's parity net (7 outputs for a 64 px patch) does not run on eye patches.
+    EXPECT_THROW(IrisNet(test::fixtureBytes("cnn_parity.onnx"), "the cascade's net"), Error);
+}
+
+TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionOne) {
+    FACETRACK_REQUIRE_EYE_MODEL();
+    EyeModelData m = readEyeModel(test::sourceDir() + "/models/eye_model.ftm");
+    m.iris_net = test::fixtureBytes("iris_net_fixture.onnx");
+    const std::string path = test::tempPath("eyes_cnn.ftm");
+    writeEyeModel(path, m);
+    EXPECT_EQ(readEyeModel(path).iris_net, m.iris_net);
+    // The stage classifies with it.
+    Models models = Models::loadDefault();
+    models.eyes = EyeModel::load(path);
+    const Tracker tracker(models, TrackerConfig{});
+    bool named = false;
+    for (const StageInfo& s : tracker.stages()) named = named || (s.name == "gaze" && s.detail.find("iris CNN") != std::string::npos);
+    EXPECT_TRUE(named) << "the gaze stage does not say it uses the iris CNN";
+    // A broken net is an error when the file is written or read, naming the net.
+    EyeModelData bad = m;
+    bad.iris_net = "not an onnx file";
+    try {
+        writeEyeModel(path, bad);
+        ADD_FAILURE() << "a broken iris net was written";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("iris net"), std::string::npos) << e.what();
+    }
+    // Version 1 (no iris net): the payload without its last string.
+    {
+        EyeModelData v1 = m;
+        v1.iris_net.clear();
+        writeEyeModel(path, v1);
+        std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
+        payload.resize(payload.size() - sizeof(std::uint32_t));  // the empty string's length
+        core::writeModelFile(path, kEyeModelMagic, 1, payload);
+    }
+    const EyeModelData old = readEyeModel(path);
+    EXPECT_TRUE(old.iris_net.empty());
+    EXPECT_EQ(old.pixels.leaves, m.pixels.leaves);
+    std::filesystem::remove(path);
 }
 
 /// An eye observed perfectly: the classifier's maps drawn from the model itself at `angles`.

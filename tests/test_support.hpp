@@ -45,6 +45,12 @@ inline std::vector<cv::Mat> clipFrames(int count, const std::string& clip = "clm
 inline std::string tempPath(const std::string& name) {
     return (std::filesystem::temp_directory_path() / ("facetrack_test_" + std::to_string(::getpid()) + "_" + name)).string();
 }
+/// The bytes of a file in tests/data.
+inline std::string fixtureBytes(const std::string& name) {
+    std::ifstream in(sourceDir() + "/tests/data/" + name, std::ios::binary);
+    EXPECT_TRUE(in) << name;
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
 inline std::string shippedFaceModel() { return sourceDir() + "/models/face_model.ftm"; }
 
 struct CommandRun {

@@ -38,6 +38,10 @@ Models trackingModels(const Args& args) {
         const std::string cnn = args.get("--cnn");
         models.cnn = cnn == "none" ? nullptr : CnnModel::load(cnn);
     }
+    if (args.has("--eyes")) {
+        const std::string eyes = args.get("--eyes");
+        models.eyes = eyes == "none" ? nullptr : EyeModel::load(eyes);
+    }
     return models;
 }
 

@@ -17,14 +17,14 @@ inline const std::set<std::string> kDetectorOptions = {"--detector", "--yunet", 
 DetectorConfig detectorConfig(const Args& args);
 
 /// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --expression-prior F,
-/// --filter-cutoff HZ, --filter-beta B, --cnn FILE|none, and the flag --no-filter.
+/// --filter-cutoff HZ, --filter-beta B, --cnn FILE|none, --eyes FILE|none, and the flag --no-filter.
 inline const std::set<std::string> kTrackerOptions = {"--max-faces", "--fov", "--focal", "--calibration-frames",
-                                                      "--expression-prior", "--filter-cutoff", "--filter-beta", "--cnn"};
+                                                      "--expression-prior", "--filter-cutoff", "--filter-beta", "--cnn", "--eyes"};
 inline const std::set<std::string> kTrackerFlags = {"--no-filter"};
 TrackerConfig trackerConfig(const Args& args);
 
 /// The shipped models (Models::loadDefault), the CNN cascade replaced by --cnn FILE, or left
-/// out with --cnn none.
+/// out with --cnn none; the eye model likewise by --eyes FILE|none.
 Models trackingModels(const Args& args);
 
 /// The options of a command that tracks: the detector's and the tracker's, plus `more`.

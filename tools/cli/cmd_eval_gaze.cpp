@@ -49,11 +49,11 @@ struct ClipFrame {
 };
 
 void evalClip(const std::string& shared, const std::string& clip, const std::map<std::string, tools::TeacherRecord>& teacher,
-              const TrackerConfig& config, std::vector<double>& pupilErrors, std::vector<double>& eventsFound,
+              const Models& models, const TrackerConfig& config, std::vector<double>& pupilErrors, std::vector<double>& eventsFound,
               std::vector<double>& openAsClosed) {
     cv::VideoCapture video(shared + "/data/clips/" + clip);
     if (!video.isOpened()) throw Error("cannot open clip " + clip);
-    Tracker tracker(Models::loadDefault(), config);
+    Tracker tracker(models, config);
     std::vector<ClipFrame> frames;
     cv::Mat bgr;
     FrameResult result;
@@ -113,10 +113,10 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
                 events ? static_cast<double>(found) / events : std::nan(""), open ? 100.0 * openClosed / open : 0.0, openClosed, open);
 }
 
-void eval300W(const std::string& shared, tools::Split split, const TrackerConfig& config) {
+void eval300W(const std::string& shared, tools::Split split, const Models& models, const TrackerConfig& config) {
     const std::string root = tools::faces300wRoot("");
     const auto teacher = tools::readTeacher(shared + "/data/teacher/faces300w_iris.jsonl");
-    Tracker tracker(Models::loadDefault(), config);
+    Tracker tracker(models, config);
     std::vector<double> errors;
     std::vector<std::pair<const tools::TeacherRecord*, FaceResult>> faces;
     FrameResult result;
@@ -165,22 +165,23 @@ int runEvalGaze(const std::vector<std::string>& argv) {
     const std::string shared = core::sharedDirectory();
     if (shared.empty()) throw Error("../shared not found: the teacher labels and clips live there");
     const TrackerConfig config = trackerConfig(args);
-    if (!Models::loadDefault().eyes) throw Error("no eye model: " + EyeModel::defaultPath() + " not found");
+    const Models models = trackingModels(args);
+    if (!models.eyes) throw Error("no eye model: " + EyeModel::defaultPath() + " not found (or --eyes none)");
 
     const auto clips = tools::splitList(args.get("--clips", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
     if (!clips.empty()) {
         const auto teacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
         std::vector<double> pupil, recall, openClosed;
         std::printf("clips (teacher: MediaPipe iris + eyelids):\n");
-        for (const auto& clip : clips) evalClip(shared, clip, teacher, config, pupil, recall, openClosed);
+        for (const auto& clip : clips) evalClip(shared, clip, teacher, models, config, pupil, recall, openClosed);
         std::printf("clips together: pupil error mean %.4f p95 %.4f; blink recall (mean over clips) %.2f; "
                     "open frames read as closed %.2f %%\n",
                     mean(pupil), percentile(pupil, 0.95), mean(recall), 100.0 * mean(openClosed));
     }
     const std::string split = args.get("--split", "validation");
-    if (split != "none") eval300W(shared, tools::parseSplit(split), config);
+    if (split != "none") eval300W(shared, tools::parseSplit(split), models, config);
     const int synthetic = static_cast<int>(args.number("--synthetic", 400));
-    if (synthetic > 0) evalSyntheticGaze(synthetic, config);
+    if (synthetic > 0) evalSyntheticGaze(synthetic, models, config);
     return 0;
 }
 

@@ -135,8 +135,7 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
 
 }  // namespace
 
-void evalSyntheticGaze(int renders, const TrackerConfig& config) {
-    const Models models = Models::loadDefault();
+void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& config) {
     tools::SyntheticRenderer renderer(models.face);
     // The renderer's camera, as a user who calibrated theirs would give it.
     TrackerConfig known = config;

@@ -7,6 +7,6 @@
 
 namespace facetrack::cli {
 
-void evalSyntheticGaze(int renders, const TrackerConfig& config);
+void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& config);
 
 }  // namespace facetrack::cli

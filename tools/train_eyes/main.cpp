@@ -9,6 +9,7 @@
 #include "app/args.hpp"
 #include "app/image_view.hpp"
 #include "common/faces300w.hpp"
+#include "common/npy_writer.hpp"
 #include "common/synthetic_face.hpp"
 #include "common/teacher.hpp"
 #include "gaze/eye_model_data.hpp"
@@ -27,6 +28,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <mutex>
 #include <random>
 #include <sstream>
@@ -38,12 +41,17 @@ namespace {
 
 const char* kUsage = R"(usage: train_eyes [--out models/eye_model.ftm] [--holdout CLIP,CLIP]
                   [--pixel-trees N] [--pixel-depth D] [--aperture-trees N] [--aperture-depth D] [--seed S]
-                  [--synthetic RENDERS] [--synthetic-pixels]
+                  [--synthetic RENDERS] [--synthetic-pixels] [--samples-out DIR]
+                  [--iris-net NET.onnx [--from MODEL.ftm]]
 Trains the eye model on the teacher labels in ../shared/data/teacher. Held out from training:
 300-W validation and test, and the clips of --holdout (default: liveportrait_d14_gaze_shifts.mp4,
 fgnet_talking_face_franck.mp4). The aperture forest also learns from RENDERS synthetic renders of
 the face model (default 2,500; exact classes and apertures; eval-gaze renders others), and the pixel
-forest too with --synthetic-pixels. Reports pixel accuracy and aperture error on held-out eyes.)";
+forest too with --synthetic-pixels. Reports pixel accuracy and aperture error on held-out eyes.
+--samples-out DIR writes the eye patches instead, for the iris CNN (train_iris_net.py):
+DIR/{train,validation,heldout}_{patches,classes,info}.npy, then stops.
+--iris-net puts that CNN in the model, in place of the pixel forest; with --from it is added to
+an existing model (its forests kept) instead of training one.)";
 
 struct EyeSample {
     cv::Mat patch;
@@ -326,13 +334,36 @@ void reportAperture(const PatchForest& forest, const Dataset& data, const char* 
                 absError / n, sumT / n, r, data.eyes.size());
 }
 
+
+/// The patches (float32 N x 28 x 40, normalised), every pixel's class (uint8,
+/// the teacher's lids and iris or a render's exact classes) and per eye
+/// (aperture, iris usable, synthetic) as float32 N x 3.
+void writeSamples(const Dataset& data, const std::string& prefix) {
+    const std::string rows = std::to_string(kPatchHeight) + ", " + std::to_string(kPatchWidth);
+    tools::NpyWriter patches(prefix + "_patches.npy", "<f4", rows), classes(prefix + "_classes.npy", "|u1", rows),
+        info(prefix + "_info.npy", "<f4", "3");
+    cv::Mat cls(kPatchHeight, kPatchWidth, CV_8U);
+    for (const EyeSample& e : data.eyes) {
+        for (int y = 0; y < kPatchHeight; ++y)
+            for (int x = 0; x < kPatchWidth; ++x) cls.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(pixelClassOf(e, x, y));
+        patches.add(e.patch);
+        classes.add(cls);
+        const float row[3] = {e.labels.aperture, e.iris_usable ? 1.f : 0.f, e.classes.empty() ? 0.f : 1.f};
+        info.add(row, sizeof row);
+    }
+    patches.finish();
+    classes.finish();
+    info.finish();
+    std::printf("wrote %s_{patches,classes,info}.npy: %d eyes\n", prefix.c_str(), patches.rows());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     try {
         const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                                {"--out", "--holdout", "--pixel-trees", "--pixel-depth", "--aperture-trees", "--aperture-depth", "--seed",
-                                "--synthetic"},
+                                "--synthetic", "--samples-out", "--iris-net", "--from"},
                                {"--help", "--synthetic-pixels"});
         if (args.has("--help")) {
             std::puts(kUsage);
@@ -341,6 +372,22 @@ int main(int argc, char** argv) {
         const std::string shared = core::sharedDirectory();
         if (shared.empty()) throw Error("../shared not found: the teacher labels live there");
         const std::string out = args.get("--out", "models/eye_model.ftm");
+        const auto irisNet = [&] {
+            const std::string path = args.get("--iris-net", "");
+            std::ifstream in(path, std::ios::binary);
+            if (!in) throw Error("cannot read the iris net '" + path + "'");
+            return std::string(std::istreambuf_iterator<char>(in), {});
+        };
+        if (args.has("--from")) {
+            if (!args.has("--iris-net")) throw Error("--from needs --iris-net");
+            EyeModelData model = readEyeModel(args.get("--from", ""));
+            model.iris_net = irisNet();
+            model.provenance += "; iris CNN " + std::filesystem::path(args.get("--iris-net", "")).filename().string() +
+                                " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
+            writeEyeModel(out, model);
+            std::printf("wrote %s (%.1f kB): %s\n", out.c_str(), std::filesystem::file_size(out) / 1024.0, model.provenance.c_str());
+            return 0;
+        }
         const auto holdout = tools::splitList(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
         const unsigned seed = static_cast<unsigned>(args.number("--seed", 1));
         const auto start = std::chrono::steady_clock::now();
@@ -370,6 +417,14 @@ int main(int argc, char** argv) {
         std::printf("synthetic: %zu eye patches from %d renders (%.0f s)\n", synth.eyes.size(), synthetic, seconds());
         const std::size_t realEyes = train.eyes.size();
         for (auto& e : synth.eyes) train.eyes.push_back(std::move(e));
+        if (args.has("--samples-out")) {
+            const std::string dir = args.get("--samples-out", "");
+            std::filesystem::create_directories(dir);
+            writeSamples(train, dir + "/train");
+            writeSamples(validation, dir + "/validation");
+            writeSamples(heldClips, dir + "/heldout");
+            return 0;
+        }
 
         // Pixel classifier.
         // Synthetic eyes teach the aperture forest closed and half-closed eyes at
@@ -441,6 +496,11 @@ int main(int argc, char** argv) {
         for (const auto& c : trainClips) provenance << " " << c;
         provenance << "; " << synthetic << " synthetic renders (" << (args.has("--synthetic-pixels") ? "both forests" : "aperture forest")
                    << "); patches cut with facetrack's own landmarks";
+        if (args.has("--iris-net")) {
+            model.iris_net = irisNet();
+            provenance << "; iris CNN " << std::filesystem::path(args.get("--iris-net", "")).filename().string()
+                       << " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
+        }
         model.provenance = provenance.str();
         writeEyeModel(out, model);
         std::printf("wrote %s (%.1f kB) in %.0f s: %s\n", out.c_str(), std::filesystem::file_size(out) / 1024.0, seconds(),

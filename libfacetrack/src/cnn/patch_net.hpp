@@ -7,11 +7,12 @@
 // The net's input is the patch standardised per patch, (I - mean) / sigma
 // (population sigma, I in [0, 1]), as the training script does.
 
+#include "core/onnx_net.hpp"
+
 #include <Eigen/Core>
-#include <opencv2/dnn.hpp>
+#include <opencv2/core.hpp>
 
 #include <string>
-#include <vector>
 
 namespace facetrack::cnn {
 
@@ -29,10 +30,8 @@ public:
     const Eigen::VectorXd& predict(const cv::Mat& patch);
 
 private:
-    cv::dnn::Net net_;
+    core::OnnxNet net_;
     int size_;
-    cv::Mat input_;
-    std::vector<cv::Mat> outputs_;
     Eigen::VectorXd output_;
 };
 

@@ -3,6 +3,7 @@
 #include "core/binary_io.hpp"
 #include "facetrack/version.hpp"
 #include "gaze/eye_model_data.hpp"
+#include "gaze/iris_net.hpp"
 
 #include <cmath>
 #include <string_view>
@@ -35,6 +36,7 @@ void validate(const EyeModelData& m, const std::string& what) {
     if (m.pixels.outputs != kPixelClasses || m.aperture.outputs != 1) throw Error(what + ": corrupt: forest outputs");
     if (!(m.open_aperture > 0.f && m.open_aperture < 2.f && m.closed_aperture >= 0.f && m.closed_aperture < m.open_aperture))
         throw Error(what + ": corrupt: open or closed aperture");
+    if (!m.iris_net.empty()) IrisNet(m.iris_net, what + ": its iris net");  // loads and runs once, or throws
 }
 }  // namespace
 
@@ -46,12 +48,14 @@ void writeEyeModel(const std::string& path, const EyeModelData& m) {
     w.put(m.open_aperture);
     w.put(m.closed_aperture);
     w.putString(m.provenance);
+    w.putString(m.iris_net);
     core::writeModelFile(path, kEyeModelMagic, kEyeModelVersion, w.bytes());
 }
 
 EyeModelData readEyeModel(const std::string& path) {
     const std::string what = "eye model '" + path + "'";
-    const std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
+    std::uint32_t version = 0;
+    const std::string payload = core::readModelFile(path, kEyeModelMagic, 1, kEyeModelVersion, "eye model", version);
     core::BinaryReader r(payload, what);
     EyeModelData m;
     m.pixels = getForest(r);
@@ -59,6 +63,7 @@ EyeModelData readEyeModel(const std::string& path) {
     m.open_aperture = r.get<float>();
     m.closed_aperture = r.get<float>();
     m.provenance = r.getString();
+    if (version >= 2) m.iris_net = r.getString();
     r.expectEnd();
     validate(m, what);
     return m;

@@ -1,6 +1,7 @@
 #pragma once
 // What an eye model file holds (facetrack/eye_model.hpp), and its file format.
 
+#include "gaze/eye_patch.hpp"
 #include "gaze/patch_forest.hpp"
 
 #include <cstdint>
@@ -22,6 +23,13 @@ constexpr PatchRegion kClassifiedRegion{};
 
 enum PixelClass { kSkin = 0, kSclera = 1, kIris = 2, kPixelClasses = 3 };
 
+/// The iris net's output grid: stride 2 over the whole patch, cell (j, i) at
+/// patch pixel (2i, 2j); kClassifiedRegion's cells are among them.
+constexpr int kIrisNetRows = kPatchHeight / 2;
+constexpr int kIrisNetColumns = kPatchWidth / 2;
+static_assert(kClassifiedRegion.step == 2 && kClassifiedRegion.x0 % 2 == 0 && kClassifiedRegion.y0 % 2 == 0,
+              "the classified region's cells must be cells of the iris net's grid");
+
 struct EyeModelData {
     PatchForest pixels;     ///< anchor: the pixel; outputs P(skin), P(sclera), P(iris)
     PatchForest aperture;   ///< anchor: the patch origin; output: lid aperture / eye width
@@ -32,10 +40,15 @@ struct EyeModelData {
     float open_aperture = 0.3f;
     float closed_aperture = 0.1f;
     std::string provenance;
+    /// Optional (file version 2): an ONNX CNN that replaces the pixel forest:
+    /// N x 1 x 28 x 40 normalised patches -> N x 3 x 14 x 20 class
+    /// probabilities (skin, sclera, iris) on the grid above
+    /// (tools/train_eyes/train_iris_net.py). Empty: the pixel forest classifies.
+    std::string iris_net;
 };
 
 constexpr char kEyeModelMagic[] = "FTEYES01";
-constexpr std::uint32_t kEyeModelVersion = 1;
+constexpr std::uint32_t kEyeModelVersion = 2;  ///< 1: no iris net
 
 void writeEyeModel(const std::string& path, const EyeModelData& model);
 /// Throws Error naming the file when it is missing, truncated or corrupt.

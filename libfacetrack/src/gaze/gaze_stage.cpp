@@ -4,6 +4,7 @@
 #include "gaze/eye_patch.hpp"
 #include "filter/one_euro.hpp"
 #include "gaze/gaze_fit.hpp"
+#include "gaze/iris_net.hpp"
 
 #include "facetrack/posed_mesh.hpp"
 
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace facetrack::gaze {
 
@@ -89,10 +91,14 @@ public:
           face_(std::move(face)),
           rigs_(EyeRig::both(*face_)),
           shapes_(eyeShapes(*face_)),
-          landmark_vertices_(face_->landmarkVertices()) {}
+          landmark_vertices_(face_->landmarkVertices()) {
+        if (!eyes_->data().iris_net.empty()) iris_net_.emplace(eyes_->data().iris_net, "eye model '" + eyes_->sourcePath() + "': its iris net");
+    }
 
     StageInfo info() const override {
-        return {"gaze", true, "eye patches, pixel and aperture forests, binocular MAP fit (" + eyes_->sourcePath() + ")"};
+        return {"gaze", true,
+                std::string("eye patches, ") + (iris_net_ ? "iris CNN" : "pixel forest") + ", aperture forest, binocular MAP fit (" +
+                    eyes_->sourcePath() + ")"};
     }
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override {
@@ -128,12 +134,15 @@ public:
         std::array<EyeObservation, 2> seen;
         std::array<float, 2> ratio{}, openness{};
         placeEyeballs(*r.landmarks, R, t, frame.camera, s);
+        std::array<bool, 2> cut{};
+        for (int e = 0; e < 2; ++e)
+            cut[e] = cutEyePatch(frame.gray, *r.landmarks, e == 0 ? Eye::Left : Eye::Right, s.eyes[static_cast<std::size_t>(e)].patch);
+        classify(model, cut, s);
         for (int e = 0; e < 2; ++e) {
             EyeState& eye = s.eyes[static_cast<std::size_t>(e)];
             const Eigen::Vector3f c = Eigen::Vector3f(s.centres[e].x, s.centres[e].y, s.centres[e].z) + s.offset[e];
             seen[e].centre = R * c + t;
-            if (!cutEyePatch(frame.gray, *r.landmarks, e == 0 ? Eye::Left : Eye::Right, eye.patch)) continue;
-            classify(model, eye);
+            if (!cut[e]) continue;
             float aperture = 0.f;
             model.aperture.evaluate(eye.patch.pixels, 0, 0, &aperture);
             // Looking down lowers the upper lid: the reference follows the (held) gaze pitch.
@@ -183,7 +192,24 @@ public:
     }
 
 private:
-    void classify(const EyeModelData& model, EyeState& eye) const {
+    /// The iris and open maps of the eyes that were cut: by the iris CNN when the model has one, else the pixel forest.
+    void classify(const EyeModelData& model, const std::array<bool, 2>& cut, GazeFaceState& s) {
+        if (iris_net_) {
+            std::array<const cv::Mat*, 2> patches{};
+            std::array<cv::Mat*, 2> iris{}, open{};
+            for (std::size_t e = 0; e < 2; ++e) {
+                patches[e] = cut[e] ? &s.eyes[e].patch.pixels : nullptr;
+                iris[e] = &s.eyes[e].iris;
+                open[e] = &s.eyes[e].open;
+            }
+            iris_net_->classify(patches, iris, open);
+            return;
+        }
+        for (std::size_t e = 0; e < 2; ++e)
+            if (cut[e]) classifyByForest(model, s.eyes[e]);
+    }
+
+    static void classifyByForest(const EyeModelData& model, EyeState& eye) {
         float p[kPixelClasses];
         for (int y = 0; y < kRegionH; ++y) {
             float* iris = eye.iris.ptr<float>(y);
@@ -262,6 +288,7 @@ private:
     std::array<EyeRig, 2> rigs_;
     std::array<EyeShapes, 2> shapes_;
     std::vector<int> landmark_vertices_;
+    std::optional<IrisNet> iris_net_;
 };
 
 }  // namespace
