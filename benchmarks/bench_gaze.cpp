@@ -1,29 +1,50 @@
-// The gaze stage alone, both eyes of one face (patches, pixel and aperture
-// forests, binocular fit), on a tracked 640x480 frame; and the whole tracking
-// frame with and without it, in the same run (bench_tracking.cpp's loop).
+// The gaze stage alone, both eyes of one face (patches, the iris CNN or the
+// pixel forest, the aperture forest, binocular fit), on a tracked 640x480
+// frame; and the whole tracking frame with and without it, in the same run
+// (bench_tracking.cpp's loop). FACETRACK_EYE_MODEL names another eye model
+// than the shipped one (a candidate, before it is shipped).
 
 #include "bench_support.hpp"
 
 #include "core/environment.hpp"
 #include "core/image.hpp"
+#include "gaze/eye_model_data.hpp"
 #include "gaze/gaze_stage.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <cstdlib>
+
 namespace facetrack::bench {
 namespace {
 
-void BM_Gaze_BothEyes(benchmark::State& state) {
+/// The eye model to measure: FACETRACK_EYE_MODEL, else the shipped one.
+Models benchModels() {
     Models models = Models::loadDefault();
+    if (const char* given = std::getenv("FACETRACK_EYE_MODEL")) models.eyes = EyeModel::load(given);
+    return models;
+}
+
+/// Arg 0: the pixel forest (the model's iris CNN left out); 1: the model as it is (its iris CNN when it has one).
+void BM_Gaze_BothEyes(benchmark::State& state) {
+    Models models = benchModels();
     if (!models.eyes) {
         state.SkipWithError("no eye model");
         return;
     }
     const auto tracked = trackedFrame(state, models, "liveportrait_d14_gaze_shifts.mp4", 40);
     if (!tracked) return;
-    auto stage = gaze::makeGazeStage(models.eyes, models.face, true);
+    std::shared_ptr<const EyeModel> eyes = models.eyes;
+    const bool cnn = state.range(0) == 1 && !eyes->data().iris_net.empty();
+    if (state.range(0) == 0 && !eyes->data().iris_net.empty()) {
+        auto forest = std::make_shared<gaze::EyeModelData>(eyes->data());
+        forest->iris_net.clear();
+        eyes = std::make_shared<const EyeModel>(forest, eyes->sourcePath());
+    }
+    state.SetLabel(cnn ? "iris CNN" : "pixel forest");
+    auto stage = gaze::makeGazeStage(eyes, models.face, true);
     auto faceState = stage->newFaceState();
     pipeline::FaceTrack face;
     face.result = tracked->result.faces[0];
@@ -33,7 +54,7 @@ void BM_Gaze_BothEyes(benchmark::State& state) {
         benchmark::DoNotOptimize(face.result.gaze);
     }
 }
-BENCHMARK(BM_Gaze_BothEyes)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_Gaze_BothEyes)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 /// The tracking-mode frame of d14 at 640x480, gaze on (the shipped models) or off (no eye model).
 void BM_TrackingFrame640x480_d14(benchmark::State& state) {
@@ -44,7 +65,7 @@ void BM_TrackingFrame640x480_d14(benchmark::State& state) {
         frames.push_back(resized.clone());
     }
     if (skipWithoutShared(state, frames.empty() ? cv::Mat() : frames[0])) return;
-    Models models = Models::loadDefault();
+    Models models = benchModels();
     if (state.range(0) == 0) models.eyes = nullptr;
     const std::string cascade = benchCascadePath();  // with FACETRACK_CNN_CASCADE: the frame with the cnn stage
     models.cnn = cascade.empty() ? nullptr : CnnModel::load(cascade);

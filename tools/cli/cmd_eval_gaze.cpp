@@ -34,7 +34,9 @@ The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, 
            median): the share with eyeBlink >= 0.5 in the run (recall); and the share of clearly open
            frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5
   synthetic  N renders of the face model with a textured iris at known gaze (see docs/gaze.md):
-           angular error by inter-ocular bin, mean and p95
+           angular error by inter-ocular bin, mean and p95; the mean signed error (bias) and the
+           single-frame head pose's error; then the targets' short sequences
+--eyes FILE evaluates another eye model than the shipped one (e.g. a candidate from train_eyes).
 Defaults: the held-out clips liveportrait_d14_gaze_shifts.mp4 and fgnet_talking_face_franck.mp4,
 the 300-W validation split, 400 synthetic renders.)";
 

@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <optional>
 #include <random>
+#include <utility>
+#include <vector>
 
 namespace facetrack::cli {
 
@@ -36,6 +38,18 @@ double angleDeg(const Vec3& a, const Vec3& b) {
     const double d = (a.x * b.x + a.y * b.y + a.z * b.z) /
                      (std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z) * std::sqrt(b.x * b.x + b.y * b.y + b.z * b.z));
     return std::acos(std::clamp(d, -1.0, 1.0)) / kDeg;
+}
+
+/// A camera-frame gaze (x right, y down, z away from the camera; a gaze at the camera is -z)
+/// as degrees towards the image's right and up.
+std::pair<double, double> cameraAngles(const Vec3& d) {
+    return {std::atan2(d.x, -d.z) / kDeg, std::atan2(-d.y, std::hypot(d.x, d.z)) / kDeg};
+}
+
+/// The angle of the rotation between two orientations, degrees.
+double rotationAngleDeg(const Quaternion& a, const Quaternion& b) {
+    const double dot = std::fabs(a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z);
+    return 2.0 * std::acos(std::min(1.0, dot)) / kDeg;
 }
 
 /// A frontal face at inter-ocular distance `iod` px looking at (yaw, pitch), with eyeBlink weights.
@@ -146,6 +160,7 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
     const auto in = [&](float lo, float hi) { return lo + (hi - lo) * unit(rng); };
     const std::array<float, 5> bins = {40, 60, 80, 100, 120};
     std::array<std::vector<double>, 4> errors;
+    std::vector<double> yawBias, pitchBias, headErrors;
     int failed = 0;
     FrameResult result;
     for (int i = 0; i < renders; ++i) {
@@ -168,8 +183,16 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
             continue;
         }
         const int bin = std::clamp(static_cast<int>((iod - bins[0]) / 20.f), 0, 3);
-        errors[static_cast<std::size_t>(bin)].push_back(angleDeg(result.faces[0].gaze->left.direction, renderer.gazeInCamera(f, 0)));
-        errors[static_cast<std::size_t>(bin)].push_back(angleDeg(result.faces[0].gaze->right.direction, renderer.gazeInCamera(f, 1)));
+        const FaceResult& face = result.faces[0];
+        for (int e = 0; e < 2; ++e) {
+            const Vec3 seen = (e == 0 ? face.gaze->left : face.gaze->right).direction, truth = renderer.gazeInCamera(f, e);
+            errors[static_cast<std::size_t>(bin)].push_back(angleDeg(seen, truth));
+            const auto [seenYaw, seenPitch] = cameraAngles(seen);
+            const auto [trueYaw, truePitch] = cameraAngles(truth);
+            yawBias.push_back(seenYaw - trueYaw);
+            pitchBias.push_back(seenPitch - truePitch);
+        }
+        if (face.pose) headErrors.push_back(rotationAngleDeg(face.pose->rotation, f.rotation));
     }
     std::vector<double> all;
     std::printf("synthetic (%d renders: gaze yaw +-25, pitch +-20 deg; head yaw +-30; noise 2 grey levels, blur 0-1 px; %d without a gaze):\n",
@@ -181,6 +204,9 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
                     bins[static_cast<std::size_t>(b) + 1], mean(e), percentile(e, 0.95), e.size());
     }
     std::printf("  all: mean %.2f p95 %.2f deg\n", mean(all), percentile(all, 0.95));
+    std::printf("  bias, estimated - rendered, camera frame: gaze to the image's right %+.2f, up %+.2f deg; "
+                "the single-frame head pose's rotation error mean %.2f p95 %.2f deg\n",
+                mean(yawBias), mean(pitchBias), mean(headErrors), percentile(headErrors, 0.95));
     evalSyntheticSequences(renderer, tracker, *models.face);
 }
 
