@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the tests: where ../shared is, and skipping without it.
 
+#include "core/binary_io.hpp"
 #include "core/environment.hpp"
 
 #include <gtest/gtest.h>
@@ -46,11 +47,7 @@ inline std::string tempPath(const std::string& name) {
     return (std::filesystem::temp_directory_path() / ("facetrack_test_" + std::to_string(::getpid()) + "_" + name)).string();
 }
 /// The bytes of a file in tests/data.
-inline std::string fixtureBytes(const std::string& name) {
-    std::ifstream in(sourceDir() + "/tests/data/" + name, std::ios::binary);
-    EXPECT_TRUE(in) << name;
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+inline std::string fixtureBytes(const std::string& name) { return core::readFileBytes(sourceDir() + "/tests/data/" + name, "fixture " + name); }
 inline std::string shippedFaceModel() { return sourceDir() + "/models/face_model.ftm"; }
 
 struct CommandRun {

@@ -14,13 +14,13 @@
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
 #include "cnn/cnn_model_data.hpp"
+#include "core/binary_io.hpp"
 #include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/face_model.hpp"
 
 #include <cstdio>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 
 using namespace facetrack;
@@ -34,11 +34,7 @@ std::vector<std::string> split(const std::string& list) {
     return out;
 }
 
-std::string readBytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot read '" + path + "'");
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+std::string readBytes(const std::string& path) { return core::readFileBytes(path, "'" + path + "'"); }
 
 std::string columnsPath(const std::string& onnxPath) {
     return onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + ".columns.txt";

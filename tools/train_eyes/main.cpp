@@ -15,6 +15,7 @@
 #include "gaze/eye_model_data.hpp"
 #include "gaze/forest_training.hpp"
 
+#include "core/binary_io.hpp"
 #include "core/environment.hpp"
 #include "facetrack/facetrack.hpp"
 
@@ -28,8 +29,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <mutex>
 #include <random>
 #include <sstream>
@@ -374,9 +373,7 @@ int main(int argc, char** argv) {
         const std::string out = args.get("--out", "models/eye_model.ftm");
         const auto irisNet = [&] {
             const std::string path = args.get("--iris-net", "");
-            std::ifstream in(path, std::ios::binary);
-            if (!in) throw Error("cannot read the iris net '" + path + "'");
-            return std::string(std::istreambuf_iterator<char>(in), {});
+            return core::readFileBytes(path, "the iris net '" + path + "'");
         };
         if (args.has("--from")) {
             if (!args.has("--iris-net")) throw Error("--from needs --iris-net");

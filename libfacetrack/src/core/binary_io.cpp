@@ -91,13 +91,18 @@ std::string readModelFile(const std::string& path, std::string_view magic, std::
     return readModelFile(path, magic, version, version, kind, fileVersion);
 }
 
-std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t oldest, std::uint32_t newest,
-                          const std::string& kind, std::uint32_t& fileVersion) {
-    const std::string what = kind + " '" + path + "'";
+std::string readFileBytes(const std::string& path, const std::string& what) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno));
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (in.bad()) throw Error("cannot read " + what + ": " + std::strerror(errno));
+    return bytes;
+}
+
+std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t oldest, std::uint32_t newest,
+                          const std::string& kind, std::uint32_t& fileVersion) {
+    const std::string what = kind + " '" + path + "'";
+    const std::string bytes = readFileBytes(path, what);
 
     if (bytes.size() < kHeaderSize) {
         throw Error(what + ": truncated (" + std::to_string(bytes.size()) + " bytes, shorter than the header)");

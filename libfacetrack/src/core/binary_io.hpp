@@ -101,6 +101,9 @@ private:
 };
 
 /// Writes the container around `payload`. Throws Error when the file cannot be written.
+/// A whole file's bytes; `what` names it in the Error thrown when it cannot be opened or read.
+std::string readFileBytes(const std::string& path, const std::string& what);
+
 void writeModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
                     const std::string& payload);
 
