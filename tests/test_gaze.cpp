@@ -304,6 +304,58 @@ TEST(GazeFit, RecoversKnownGazeFromIdealMapsAndHoldsWhenBothEyesClose) {
     }
 }
 
+TEST(GazeFit, TheAppearanceTermPutsTheIrisWhereThePatchShowsIt) {
+    // The pixel classifier's map says "looking ahead" (as a forest trained on
+    // mostly centred irises does for an eye looking aside); the patch shows a
+    // dark iris at 18 degrees to the side on a shaded sclera.
+    const Eigen::Matrix3f R = Eigen::Quaternionf(0, 1, 0, 0).toRotationMatrix();
+    const Eigen::Vector3f t(0, 0, 450);
+    fit::Camera camera;
+    camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
+    const cv::Mat gray(480, 640, CV_8U, cv::Scalar(128));
+    std::array<IdealEye, 2> eyes;
+    const GazeAngles truth{Eigen::Vector2f(16.5f * kDeg, -4.f * kDeg), Eigen::Vector2f(19.5f * kDeg, -4.f * kDeg)};
+    for (int e = 0; e < 2; ++e) {
+        IdealEye& eye = eyes[static_cast<std::size_t>(e)];
+        const float side = e == 0 ? 1.f : -1.f;
+        eye.seen.centre = R * Eigen::Vector3f(side * 31.f, 35.f, 70.f) + t;
+        const auto project = [&](const Eigen::Vector3f& head) {
+            const Eigen::Vector3f c = R * head + t;
+            return Point2{static_cast<float>(camera.fx * c.x() / c.z() + camera.cx), static_cast<float>(camera.fy * c.y() / c.z() + camera.cy)};
+        };
+        ASSERT_TRUE(cutEyePatch(gray, project({side * 45.f, 35.f, 78.f}), project({side * 17.f, 35.f, 78.f}), e == 0, eye.patch));
+        eye.seen.patch = &eye.patch;
+        eye.seen.iris = &eye.iris;
+        eye.seen.open = &eye.open;
+        eye.seen.weight = 1.f;
+        drawIdeal(eye, R, camera, Eigen::Vector2f::Zero());
+        eye.iris *= 0.5f;  // diffuse, as a forest's averaged leaves are
+        ProjectedIris p;
+        ASSERT_TRUE(projectIris(eye.seen, R, camera, truth[static_cast<std::size_t>(e)], p));
+        Eigen::Matrix2f axes;
+        axes << p.axis1, p.axis2;
+        const Eigen::Matrix2f inverse = axes.inverse();
+        for (int y = 0; y < kPatchHeight; ++y)
+            for (int x = 0; x < kPatchWidth; ++x) {
+                const bool iris = (inverse * (Eigen::Vector2f(static_cast<float>(x), static_cast<float>(y)) - p.centre)).norm() < 1.f;
+                eye.patch.pixels.at<float>(y, x) = iris ? -1.5f : 0.8f + 0.6f * static_cast<float>(x) / kPatchWidth;
+            }
+    }
+    const auto worstError = [&](const GazeFitSettings& settings) {
+        const GazeAngles got = fitGaze({eyes[0].seen, eyes[1].seen}, R, camera, {}, false, settings);
+        double worst = 0;
+        for (std::size_t e = 0; e < 2; ++e) worst = std::max(worst, static_cast<double>((got[e] - truth[e]).norm() / kDeg));
+        return worst;
+    };
+    GazeFitSettings mapOnly;
+    mapOnly.pixel_sigma = 0.f;
+    const double withoutAppearance = worstError(mapOnly), withAppearance = worstError(GazeFitSettings{});
+    std::printf("worst error from a map centred ahead: %.2f deg without the appearance term, %.2f with it\n", withoutAppearance,
+                withAppearance);
+    EXPECT_GT(withoutAppearance, 8.0) << "the map alone should hold the gaze near ahead";
+    EXPECT_LT(withAppearance, 2.5) << "the patch's iris should win over the map";
+}
+
 TEST(GazeWeights, BlinkAndWideFromOpenness) {
     EXPECT_EQ(blinkWeight(1.f), 0.f);
     EXPECT_EQ(blinkWeight(0.f), 1.f);

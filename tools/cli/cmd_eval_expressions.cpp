@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "plot.hpp"
+#include "stats.hpp"
 
 #include "app/image_view.hpp"
 #include "dense/label_table.hpp"
@@ -130,19 +131,6 @@ std::map<std::string, std::array<float, kArkitBlendshapeCount>> readDenseLabels(
         out[row.key] = model.toArkit(weights);
     }
     return out;
-}
-
-double pearson(const std::vector<double>& a, const std::vector<double>& b) {
-    const double n = static_cast<double>(a.size());
-    double ma = 0, mb = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) ma += a[i] / n, mb += b[i] / n;
-    double sab = 0, saa = 0, sbb = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-        sab += (a[i] - ma) * (b[i] - mb);
-        saa += (a[i] - ma) * (a[i] - ma);
-        sbb += (b[i] - mb) * (b[i] - mb);
-    }
-    return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : std::nan("");
 }
 
 std::size_t idx(const std::string& name) { return static_cast<std::size_t>(arkitIndex(name)); }

@@ -69,6 +69,19 @@ EyeModelData readEyeModel(const std::string& path) {
     return m;
 }
 
+void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& iris, cv::Mat& open) {
+    float p[kPixelClasses];
+    for (int y = 0; y < kClassifiedRegion.rows(); ++y) {
+        float* irisRow = iris.ptr<float>(y);
+        float* openRow = open.ptr<float>(y);
+        for (int x = 0; x < kClassifiedRegion.columns(); ++x) {
+            model.pixels.evaluate(patch, kClassifiedRegion.x(x), kClassifiedRegion.y(y), p);
+            irisRow[x] = p[kIris];
+            openRow[x] = p[kIris] + p[kSclera];
+        }
+    }
+}
+
 }  // namespace gaze
 
 EyeModel::EyeModel(std::shared_ptr<const gaze::EyeModelData> data, std::string source)

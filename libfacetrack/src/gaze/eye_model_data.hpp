@@ -47,6 +47,11 @@ struct EyeModelData {
     std::string iris_net;
 };
 
+/// P(iris) and P(open) = P(sclera) + P(iris) of one normalised patch on
+/// kClassifiedRegion's cells, by the pixel forest, into `iris` and `open`
+/// (CV_32F, rows() x columns(), allocated by the caller).
+void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& iris, cv::Mat& open);
+
 constexpr char kEyeModelMagic[] = "FTEYES01";
 constexpr std::uint32_t kEyeModelVersion = 2;  ///< 1: no iris net
 

@@ -14,8 +14,13 @@ constexpr float kDeg = 3.14159265358979f / 180.f;
 constexpr int kRegionW = kClassifiedRegion.columns();
 constexpr int kRegionH = kClassifiedRegion.rows();
 constexpr int kDataResiduals = kRegionW * kRegionH;
+/// The appearance term runs on every patch pixel of the classified region.
+constexpr int kPixelsW = kClassifiedRegion.x1 - kClassifiedRegion.x0;
+constexpr int kPixelsH = kClassifiedRegion.y1 - kClassifiedRegion.y0;
+constexpr int kPixelResiduals = kPixelsW * kPixelsH;
+constexpr int kEyeResiduals = kDataResiduals + kPixelResiduals;
 constexpr int kPriorResiduals = 2 + 4 + 4;  // binocular 2, temporal 4, ahead 4
-constexpr int kResiduals = 2 * kDataResiduals + kPriorResiduals;
+constexpr int kResiduals = 2 * kEyeResiduals + kPriorResiduals;
 
 Eigen::Vector2f toPatch(const EyePatch& p, const Eigen::Vector2f& image) {
     const cv::Matx23f& a = p.patch_from_image;
@@ -27,34 +32,146 @@ Eigen::Vector2f project(const fit::Camera& c, const Eigen::Vector3f& p) {
             static_cast<float>(c.fy) * p.y() / p.z() + static_cast<float>(c.cy)};
 }
 
-/// Data residuals of one eye into r[0, kDataResiduals).
-void dataResiduals(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles,
-                   float scale, float* r) {
+/// The projected iris as a soft indicator: 1 inside the ellipse, 0 outside,
+/// falling over about 0.7 patch pixels whatever the iris size.
+class SoftDisc {
+public:
+    bool set(const ProjectedIris& iris) {
+        Eigen::Matrix2f axes;
+        axes << iris.axis1, iris.axis2;
+        if (!(std::fabs(axes.determinant()) > 1e-6f)) return false;
+        inverse_ = axes.inverse();
+        centre_ = iris.centre;
+        sharpness_ = 0.5f * (iris.axis1.norm() + iris.axis2.norm()) / 0.7f;
+        return true;
+    }
+    /// The indicator along row y from column x0 on, `step` patch pixels apart, into out[0, n).
+    void row(float x0, float y, int n, float* out, int step = 1) const {
+        Eigen::Vector2f v = inverse_ * (Eigen::Vector2f(x0, y) - centre_);
+        const Eigen::Vector2f dx = static_cast<float>(step) * inverse_.col(0);
+        for (int i = 0; i < n; ++i, v += dx) {
+            const float t = sharpness_ * (1.f - v.norm());
+            // Saturated far from the edge: exp only where the indicator is between 0 and 1.
+            out[i] = t > 12.f ? 1.f : t < -12.f ? 0.f : 1.f / (1.f + std::exp(-t));
+        }
+    }
+    /// The ellipse's bounding box half-sizes.
+    Eigen::Vector2f reach() const {
+        const Eigen::Matrix2f axes = inverse_.inverse();
+        return {axes.row(0).norm(), axes.row(1).norm()};
+    }
+    const Eigen::Vector2f& centre() const { return centre_; }
+
+private:
+    Eigen::Matrix2f inverse_;
+    Eigen::Vector2f centre_;
+    float sharpness_ = 1.f;
+};
+
+/// Iris radii of sclera around the iris's box (plus 1.5 px) in the appearance
+/// term's window: the start may be half an iris off, and the window must still
+/// hold the whole iris (a margin of 0.6 radii doubled the synthetic error).
+constexpr float kWindowMargin = 1.5f;
+
+/// The patch pixels (region indices, half-open) the appearance term looks at
+/// in one Gauss-Newton step: the iris's box with a margin of sclera around it.
+struct PixelWindow {
+    int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+};
+
+/// One eye's patch pixels over the classified region and how open the eye is
+/// at each (P_open bilinear between the classifier's grid cells), gathered
+/// once per fit.
+struct EyePixels {
+    std::array<float, kPixelResiduals> intensity, open;
+    void gather(const EyeObservation& eye) {
+        const PatchRegion r = kClassifiedRegion;
+        for (int y = 0; y < kPixelsH; ++y) {
+            const float gy = std::min(static_cast<float>(y) / r.step, static_cast<float>(kRegionH - 1));
+            const int j = std::min(static_cast<int>(gy), kRegionH - 2);
+            const float fy = gy - static_cast<float>(j);
+            const float* row = eye.patch->pixels.ptr<float>(r.y0 + y);
+            for (int x = 0; x < kPixelsW; ++x) {
+                const float gx = std::min(static_cast<float>(x) / r.step, static_cast<float>(kRegionW - 1));
+                const int i = std::min(static_cast<int>(gx), kRegionW - 2);
+                const float fx = gx - static_cast<float>(i);
+                const cv::Mat& o = *eye.open;
+                const float top = (1.f - fx) * o.at<float>(j, i) + fx * o.at<float>(j, i + 1);
+                const float bottom = (1.f - fx) * o.at<float>(j + 1, i) + fx * o.at<float>(j + 1, i + 1);
+                const int k = y * kPixelsW + x;
+                open[static_cast<std::size_t>(k)] = std::clamp((1.f - fy) * top + fy * bottom, 0.f, 1.f);
+                intensity[static_cast<std::size_t>(k)] = row[r.x0 + x];
+            }
+        }
+    }
+};
+
+/// Residuals of one eye into r[0, kEyeResiduals): the classifier's maps, then the pixels of `window`.
+void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const PixelWindow& window, const Eigen::Matrix3f& R,
+                  const fit::Camera& camera, const Eigen::Vector2f& angles, float mapScale, float pixelScale, float* r) {
     ProjectedIris iris;
-    if (scale <= 0.f || !projectIris(eye, R, camera, angles, iris)) {
-        std::fill(r, r + kDataResiduals, 0.f);
-        return;
-    }
-    Eigen::Matrix2f axes;
-    axes << iris.axis1, iris.axis2;
-    const float det = axes.determinant();
-    if (!(std::fabs(det) > 1e-6f)) {
-        std::fill(r, r + kDataResiduals, 0.f);
-        return;
-    }
-    const Eigen::Matrix2f inverse = axes.inverse();
-    // Edge softness: about 0.7 patch pixels whatever the iris size.
-    const float sharpness = 0.5f * (iris.axis1.norm() + iris.axis2.norm()) / 0.7f;
+    SoftDisc disc;
+    std::fill(r, r + kEyeResiduals, 0.f);
+    if (mapScale <= 0.f || !projectIris(eye, R, camera, angles, iris) || !disc.set(iris)) return;
+    float inside[kRegionW];
     for (int y = 0; y < kRegionH; ++y) {
         const float* pi = eye.iris->ptr<float>(y);
         const float* po = eye.open->ptr<float>(y);
-        for (int x = 0; x < kRegionW; ++x) {
-            const Eigen::Vector2f q(static_cast<float>(kClassifiedRegion.x(x)), static_cast<float>(kClassifiedRegion.y(y)));
-            const float rho = (inverse * (q - iris.centre)).norm();
-            const float inside = 1.f / (1.f + std::exp(-sharpness * (1.f - rho)));
-            r[y * kRegionW + x] = scale * (pi[x] - inside * po[x]);
+        disc.row(static_cast<float>(kClassifiedRegion.x0), static_cast<float>(kClassifiedRegion.y(y)), kRegionW, inside,
+                 kClassifiedRegion.step);
+        for (int x = 0; x < kRegionW; ++x) r[y * kRegionW + x] = mapScale * (pi[x] - inside[x] * po[x]);
+    }
+    if (pixelScale <= 0.f || window.x1 <= window.x0 || window.y1 <= window.y0) return;
+    // The visible eye in two tones: the iris, uniform, inside the disc; the
+    // sclera outside, a plane (a shaded eyeball is brighter on the light's
+    // side). The tones are the open-weighted least-squares fit for this disc
+    // (a region term with the disc as its shape; w = P_open^2 keeps the lids out).
+    float* q = r + kDataResiduals;
+    Eigen::Matrix4f normal = Eigen::Matrix4f::Zero();
+    Eigen::Vector4f moment = Eigen::Vector4f::Zero();
+    const auto basis = [](float d, int x, int y) {
+        const float out = 1.f - d;
+        return Eigen::Vector4f(d, out, out * static_cast<float>(x - kPixelsW / 2) / kPixelsW,
+                               out * static_cast<float>(y - kPixelsH / 2) / kPixelsH);
+    };
+    const int n = window.x1 - window.x0;
+    for (int y = window.y0; y < window.y1; ++y) {
+        float* row = q + y * kPixelsW + window.x0;
+        disc.row(static_cast<float>(kClassifiedRegion.x0 + window.x0), static_cast<float>(kClassifiedRegion.y0 + y), n, row);
+        for (int x = window.x0; x < window.x1; ++x) {
+            const int k = y * kPixelsW + x;
+            const float o = pixels.open[static_cast<std::size_t>(k)];
+            if (o < 0.02f) continue;  // the lids: no weight
+            const Eigen::Vector4f f = basis(q[k], x, y);
+            normal.noalias() += (o * o) * f * f.transpose();
+            moment.noalias() += (o * o * pixels.intensity[static_cast<std::size_t>(k)]) * f;
         }
     }
+    const Eigen::Vector4f tones = (normal + 1e-3f * Eigen::Matrix4f::Identity()).ldlt().solve(moment);
+    for (int y = window.y0; y < window.y1; ++y) {
+        for (int x = window.x0; x < window.x1; ++x) {
+            const int k = y * kPixelsW + x;
+            q[k] = pixelScale * pixels.open[static_cast<std::size_t>(k)] *
+                   (pixels.intensity[static_cast<std::size_t>(k)] - basis(q[k], x, y).dot(tones));
+        }
+    }
+}
+
+/// The window around eye's iris at `angles`: its box and a margin of sclera.
+PixelWindow windowAround(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles) {
+    ProjectedIris iris;
+    SoftDisc disc;
+    PixelWindow w;
+    if (!projectIris(eye, R, camera, angles, iris) || !disc.set(iris)) return w;
+    const Eigen::Vector2f reach = disc.reach();
+    const Eigen::Vector2f margin = kWindowMargin * reach + Eigen::Vector2f::Constant(1.5f);
+    const Eigen::Vector2f lo = disc.centre() - margin, hi = disc.centre() + margin;
+    const auto clampTo = [](float v, int n) { return std::clamp(static_cast<int>(std::lround(v)), 0, n); };
+    w.x0 = clampTo(lo.x() - static_cast<float>(kClassifiedRegion.x0), kPixelsW);
+    w.x1 = clampTo(hi.x() - static_cast<float>(kClassifiedRegion.x0) + 1.f, kPixelsW);
+    w.y0 = clampTo(lo.y() - static_cast<float>(kClassifiedRegion.y0), kPixelsH);
+    w.y1 = clampTo(hi.y() - static_cast<float>(kClassifiedRegion.y0) + 1.f, kPixelsH);
+    return w;
 }
 
 void priorResiduals(const GazeAngles& a, const GazeAngles& previous, bool havePrevious, const GazeFitSettings& s, float* p) {
@@ -150,20 +267,30 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
     // Per thread and sized once: a tracked frame allocates nothing here.
     thread_local Eigen::VectorXf r0(kResiduals), r1(kResiduals);
     thread_local Eigen::MatrixXf J(kResiduals, 4);
+    thread_local std::array<EyePixels, 2> pixels;
     constexpr float h = 0.25f * kDeg;
-    std::array<float, 2> scale;
-    for (int e = 0; e < 2; ++e) scale[e] = std::sqrt(eyes[e].weight) / s.data_sigma;
+    std::array<float, 2> mapScale, pixelScale;
+    for (int e = 0; e < 2; ++e) {
+        mapScale[e] = std::sqrt(eyes[e].weight) / s.data_sigma;
+        pixelScale[e] = s.pixel_sigma > 0.f ? std::sqrt(eyes[e].weight) / s.pixel_sigma : 0.f;
+        if (eyes[e].weight > 0.f) pixels[e].gather(eyes[e]);
+    }
+    std::array<PixelWindow, 2> window;
+    const auto residuals = [&](int e, const Eigen::Vector2f& angles, Eigen::VectorXf& r) {
+        eyeResiduals(eyes[e], pixels[e], window[e], R, camera, angles, mapScale[e], pixelScale[e], r.data() + e * kEyeResiduals);
+    };
     for (int it = 0; it < s.iterations; ++it) {
-        for (int e = 0; e < 2; ++e) dataResiduals(eyes[e], R, camera, a[e], scale[e], r0.data() + e * kDataResiduals);
-        priorResiduals(a, previous, havePrevious, s, r0.data() + 2 * kDataResiduals);
+        for (int e = 0; e < 2; ++e) window[e] = pixelScale[e] > 0.f ? windowAround(eyes[e], R, camera, a[e]) : PixelWindow{};
+        for (int e = 0; e < 2; ++e) residuals(e, a[e], r0);
+        priorResiduals(a, previous, havePrevious, s, r0.data() + 2 * kEyeResiduals);
         // A parameter of one eye moves only that eye's data residuals (and the priors).
         for (int k = 0; k < 4; ++k) {
             const int e = k / 2;
             GazeAngles b = a;
             b[e][k % 2] += h;
             r1 = r0;
-            dataResiduals(eyes[e], R, camera, b[e], scale[e], r1.data() + e * kDataResiduals);
-            priorResiduals(b, previous, havePrevious, s, r1.data() + 2 * kDataResiduals);
+            residuals(e, b[e], r1);
+            priorResiduals(b, previous, havePrevious, s, r1.data() + 2 * kEyeResiduals);
             J.col(k) = (r1 - r0) / h;
         }
         const Eigen::Matrix4f H = J.transpose() * J + 1e-4f * Eigen::Matrix4f::Identity();

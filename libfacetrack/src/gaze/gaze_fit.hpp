@@ -58,6 +58,7 @@ struct EyeObservation {
 
 struct GazeFitSettings {
     float data_sigma = 0.3f;           ///< per-pixel probability noise
+    float pixel_sigma = 1.f;           ///< per-pixel intensity noise (normalised patch); 0: no appearance term
     float temporal_sigma_deg = 8.f;    ///< per frame
     float pitch_sigma_deg = 2.f;       ///< the two eyes' pitch difference
     float vergence_deg = 3.f;          ///< theta_R - theta_L for a typical screen distance

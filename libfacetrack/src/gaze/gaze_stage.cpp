@@ -206,20 +206,7 @@ private:
             return;
         }
         for (std::size_t e = 0; e < 2; ++e)
-            if (cut[e]) classifyByForest(model, s.eyes[e]);
-    }
-
-    static void classifyByForest(const EyeModelData& model, EyeState& eye) {
-        float p[kPixelClasses];
-        for (int y = 0; y < kRegionH; ++y) {
-            float* iris = eye.iris.ptr<float>(y);
-            float* open = eye.open.ptr<float>(y);
-            for (int x = 0; x < kRegionW; ++x) {
-                model.pixels.evaluate(eye.patch.pixels, kClassifiedRegion.x(x), kClassifiedRegion.y(y), p);
-                iris[x] = p[kIris];
-                open[x] = p[kIris] + p[kSclera];
-            }
-        }
+            if (cut[e]) classifyByForest(model, s.eyes[e].patch.pixels, s.eyes[e].iris, s.eyes[e].open);
     }
 
     /// The eyeball centres of this face's identity (once per identity: a mesh evaluation).
