@@ -14,6 +14,14 @@
 // the visible iris is D(q) P_open(q), compared with the classifier's P_iris(q):
 //   E_data = w sum_q (P_iris(q) - D(q) P_open(q))^2 / sigma_d^2,
 // w the eye's openness weight (0 for a closed eye: no data).
+// Appearance term, per eye: the normalised patch I at every pixel p of a window
+// about the iris, against the visible eye in two tones, the iris a constant mu
+// inside the disc and the sclera a plane outside it,
+//   m(p) = mu D(p) + (1 - D(p)) (a + b x + c y),
+//   E_pixels = w sum_p P_open(p)^2 (I(p) - m(p))^2 / sigma_a^2,
+// with (mu, a, b, c) the weighted least-squares fit for the disc being tried:
+// the iris is where the patch is darker in the shape the eyeball model
+// predicts, whatever the classifier's map leans towards.
 // Priors: a binocular one (a shared fixation point: equal pitch, vergence
 // theta_R - theta_L near v0), a temporal one (theta_t - theta_{t-1}) and a weak
 // pull to straight ahead. A few Gauss-Newton steps (numeric Jacobian) from an
