@@ -164,11 +164,15 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
     };
     // Fixation at inter-ocular 80 px, pixel noise only.
     tracker.reset();
-    std::vector<double> yaw, pitch;
+    std::vector<double> yaw, pitch, cameraYaw, cameraPitch;
     // After 60 frames of warm-up: the identity calibration (30 frames) and the eyeballs' placement have settled.
     for (int i = 0; i < 110; ++i) {
         const FaceResult* f = step(sequenceFace(model, 80, 8, 4, 0, 0, 100u + static_cast<unsigned>(i)));
-        if (f && i >= 60) yaw.push_back(f->gaze->right.yaw_deg), pitch.push_back(f->gaze->right.pitch_deg);
+        if (f && i >= 60) {
+            yaw.push_back(f->gaze->right.yaw_deg), pitch.push_back(f->gaze->right.pitch_deg);
+            const auto [x, y] = cameraAngles(f->gaze->right.direction);
+            cameraYaw.push_back(x), cameraPitch.push_back(y);
+        }
     }
     const auto deviation = [&](const std::vector<double>& v) {
         const double m = mean(v);
@@ -176,8 +180,9 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
         for (double x : v) s += (x - m) * (x - m);
         return v.empty() ? std::nan("") : std::sqrt(s / static_cast<double>(v.size()));
     };
-    std::printf("  fixation, inter-ocular 80 px, 50 frames of pixel noise after 60 of warm-up: gaze standard deviation yaw %.2f, pitch %.2f deg\n",
-                deviation(yaw), deviation(pitch));
+    std::printf("  fixation, inter-ocular 80 px, 50 frames of pixel noise after 60 of warm-up: gaze standard deviation yaw %.2f, pitch %.2f deg "
+                "(in the camera frame: %.2f, %.2f)\n",
+                deviation(yaw), deviation(pitch), deviation(cameraYaw), deviation(cameraPitch));
     // A 20-degree saccade: frames until within 2 degrees of the new gaze's estimate at rest.
     tracker.reset();
     for (int i = 0; i < 10; ++i) step(sequenceFace(model, 80, -10, 0, 0, 0, 200u + static_cast<unsigned>(i)));

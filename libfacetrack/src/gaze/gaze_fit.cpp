@@ -164,6 +164,7 @@ PixelWindow windowAround(const EyeObservation& eye, const Eigen::Matrix3f& R, co
     PixelWindow w;
     if (!projectIris(eye, R, camera, angles, iris) || !disc.set(iris)) return w;
     const Eigen::Vector2f reach = disc.reach();
+    if (!reach.allFinite() || !disc.centre().allFinite()) return w;
     const Eigen::Vector2f margin = kWindowMargin * reach + Eigen::Vector2f::Constant(1.5f);
     const Eigen::Vector2f lo = disc.centre() - margin, hi = disc.centre() + margin;
     const auto clampTo = [](float v, int n) { return std::clamp(static_cast<int>(std::lround(v)), 0, n); };
