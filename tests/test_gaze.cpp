@@ -251,31 +251,35 @@ void drawIdeal(IdealEye& eye, const Eigen::Matrix3f& R, const fit::Camera& camer
         }
 }
 
-TEST(GazeFit, RecoversKnownGazeFromIdealMapsAndHoldsWhenBothEyesClose) {
-    // A face 500 mm away, turned 15 degrees, eyes 31 mm either side of the middle.
-    const Eigen::Matrix3f R =
-        (Eigen::Quaternionf(0, 1, 0, 0) * Eigen::AngleAxisf(15 * kDeg, Eigen::Vector3f::UnitY())).toRotationMatrix();
-    const Eigen::Vector3f t(0, 0, 500);
-    fit::Camera camera;
-    camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
+/// Both eyes of a face at (R, t), eyes 31 mm either side of the middle, their
+/// patches cut from a flat grey frame between corners 14 mm either side of each
+/// eye, in front of the eyeball; the maps are left for the test to draw.
+void placeEyes(std::array<IdealEye, 2>& eyes, const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const fit::Camera& camera) {
     const cv::Mat gray(480, 640, CV_8U, cv::Scalar(128));
-    std::array<IdealEye, 2> eyes;
     for (int e = 0; e < 2; ++e) {
         IdealEye& eye = eyes[static_cast<std::size_t>(e)];
         const float side = e == 0 ? 1.f : -1.f;
         eye.seen.centre = R * Eigen::Vector3f(side * 31.f, 35.f, 70.f) + t;
-        // Corners 14 mm either side of the eye, in front of the eyeball.
         const auto project = [&](const Eigen::Vector3f& head) {
             const Eigen::Vector3f c = R * head + t;
             return Point2{static_cast<float>(camera.fx * c.x() / c.z() + camera.cx), static_cast<float>(camera.fy * c.y() / c.z() + camera.cy)};
         };
-        const Point2 outer = project({side * 45.f, 35.f, 78.f}), inner = project({side * 17.f, 35.f, 78.f});
-        ASSERT_TRUE(cutEyePatch(gray, outer, inner, e == 0, eye.patch));
+        ASSERT_TRUE(cutEyePatch(gray, project({side * 45.f, 35.f, 78.f}), project({side * 17.f, 35.f, 78.f}), e == 0, eye.patch));
         eye.seen.patch = &eye.patch;
         eye.seen.iris = &eye.iris;
         eye.seen.open = &eye.open;
         eye.seen.weight = 1.f;
     }
+}
+
+TEST(GazeFit, RecoversKnownGazeFromIdealMapsAndHoldsWhenBothEyesClose) {
+    // A face 500 mm away, turned 15 degrees.
+    const Eigen::Matrix3f R =
+        (Eigen::Quaternionf(0, 1, 0, 0) * Eigen::AngleAxisf(15 * kDeg, Eigen::Vector3f::UnitY())).toRotationMatrix();
+    fit::Camera camera;
+    camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
+    std::array<IdealEye, 2> eyes;
+    placeEyes(eyes, R, Eigen::Vector3f(0, 0, 500), camera);
     const std::array<std::array<float, 2>, 4> cases = {{{0, 0}, {18, -6}, {-20, 12}, {8, -15}}};
     for (const auto& c : cases) {
         // A shared fixation: the right eye 3 degrees more to the left (vergence).
@@ -309,25 +313,13 @@ TEST(GazeFit, TheAppearanceTermPutsTheIrisWhereThePatchShowsIt) {
     // mostly centred irises does for an eye looking aside); the patch shows a
     // dark iris at 18 degrees to the side on a shaded sclera.
     const Eigen::Matrix3f R = Eigen::Quaternionf(0, 1, 0, 0).toRotationMatrix();
-    const Eigen::Vector3f t(0, 0, 450);
     fit::Camera camera;
     camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
-    const cv::Mat gray(480, 640, CV_8U, cv::Scalar(128));
     std::array<IdealEye, 2> eyes;
+    placeEyes(eyes, R, Eigen::Vector3f(0, 0, 450), camera);
     const GazeAngles truth{Eigen::Vector2f(16.5f * kDeg, -4.f * kDeg), Eigen::Vector2f(19.5f * kDeg, -4.f * kDeg)};
     for (int e = 0; e < 2; ++e) {
         IdealEye& eye = eyes[static_cast<std::size_t>(e)];
-        const float side = e == 0 ? 1.f : -1.f;
-        eye.seen.centre = R * Eigen::Vector3f(side * 31.f, 35.f, 70.f) + t;
-        const auto project = [&](const Eigen::Vector3f& head) {
-            const Eigen::Vector3f c = R * head + t;
-            return Point2{static_cast<float>(camera.fx * c.x() / c.z() + camera.cx), static_cast<float>(camera.fy * c.y() / c.z() + camera.cy)};
-        };
-        ASSERT_TRUE(cutEyePatch(gray, project({side * 45.f, 35.f, 78.f}), project({side * 17.f, 35.f, 78.f}), e == 0, eye.patch));
-        eye.seen.patch = &eye.patch;
-        eye.seen.iris = &eye.iris;
-        eye.seen.open = &eye.open;
-        eye.seen.weight = 1.f;
         drawIdeal(eye, R, camera, Eigen::Vector2f::Zero());
         eye.iris *= 0.5f;  // diffuse, as a forest's averaged leaves are
         ProjectedIris p;
