@@ -210,12 +210,26 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
     }
     std::printf("  blink (2 frames half, 2 fully closed): eyeBlink peak %.2f; closed, the gaze moved %.2f deg from the last open frame\n",
                 peakBlink, moved);
+    // A head turning at 60 deg/s (2 degrees a frame) from 30 to the left to 30 to the right, the eyes
+    // looking ahead of it: the eyeballs' placement must follow the head, not lag it.
+    tracker.reset();
+    std::vector<double> turning;
+    for (int i = 0; i < 40; ++i) {
+        tools::SyntheticFace f = sequenceFace(model, 80, 4, 2, 0, 0, 700u + static_cast<unsigned>(i));
+        const float yaw = std::clamp(-30.f + 2.f * static_cast<float>(i - 5), -30.f, 30.f);
+        f.rotation = headRotation(yaw, 0, 0);
+        const FaceResult* r = step(f);
+        if (r && i >= 8 && i < 35) turning.push_back(angleDeg(r->gaze->right.direction, renderer.gazeInCamera(f, 1)));
+    }
+    std::printf("  head turning at 60 deg/s, inter-ocular 80 px: gaze angular error while it turns mean %.2f max %.2f deg\n", mean(turning),
+                turning.empty() ? std::nan("") : *std::max_element(turning.begin(), turning.end()));
     // Looking down 25 degrees (the lids follow, as the face model's eyeLookDown shapes make them).
     tracker.reset();
     double downBlink = 0;
     for (int i = 0; i < 15; ++i) {
         const FaceResult* f = step(sequenceFace(model, 80, 0, -25, 0, 0, 500u + static_cast<unsigned>(i)));
         if (f && i >= 5) downBlink = std::max(downBlink, static_cast<double>(std::max(blinkOf(*f, "eyeBlinkLeft"), blinkOf(*f, "eyeBlinkRight"))));
+        if (f && std::getenv("DBG_DOWN")) std::printf("DBG %d pitch L %.1f R %.1f open %.2f %.2f head pitch %.1f\n", i, f->gaze->left.pitch_deg, f->gaze->right.pitch_deg, f->gaze->left.openness, f->gaze->right.openness, f->pose->euler_deg.x);
     }
     std::printf("  looking down 25 deg: largest eyeBlink %.2f (a blink is >= 0.5)\n", downBlink);
     // A wink: the left eye closed, the right open.

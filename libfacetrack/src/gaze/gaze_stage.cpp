@@ -39,6 +39,13 @@ struct EyeState {
 /// still (cutoff 0.8 Hz), a saccade of hundreds of degrees a second passes in
 /// about a frame (beta 0.05 per deg/s; the speed itself low-passed at 5 Hz so it rises at once).
 const filter::OneEuroSettings kGazeSmoothing{0.8, 0.05, 5.0};
+/// The eyeball centres' 1-euro filter, camera frame in mm. They come from the
+/// fit's head pose, whose frame-to-frame jitter moves them by tenths of a
+/// millimetre, and 0.6 mm reads as a 3-degree turn of the eye: a still head's
+/// eyeballs are held still (cutoff 1 Hz), a turning head's followed (beta 1
+/// per mm/s: at 60 deg/s they move ~100 mm/s; beta 0.05 lagged them by a
+/// frame, a 13-degree gaze error).
+const filter::OneEuroSettings kEyeballSmoothing{1.0, 1.0, 1.0};
 
 struct GazeFaceState final : pipeline::StageState {
     std::array<EyeState, 2> eyes;  // the subject's left, right
@@ -46,6 +53,8 @@ struct GazeFaceState final : pipeline::StageState {
     bool have_angles = false;
     filter::OneEuroFilter smoothing{kGazeSmoothing};
     Eigen::VectorXd sample = Eigen::VectorXd::Zero(4), output = Eigen::VectorXd::Zero(4);
+    filter::OneEuroFilter eyeball_smoothing{kEyeballSmoothing};
+    Eigen::VectorXd eyeball_sample = Eigen::VectorXd::Zero(6);
     std::vector<float> centres_identity;  // the identity the eyeball centres were computed for
     bool have_centres = false;
     std::array<Vec3, 2> centres;          // eyeball rotation centres on the identity's mesh (model frame)
@@ -115,6 +124,7 @@ public:
         s.have_centres = false;
         s.have_offset = false;
         s.smoothing.reset();
+        s.eyeball_smoothing.reset();
     }
 
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
@@ -139,9 +149,13 @@ public:
             cut[e] = cutEyePatch(frame.gray, *r.landmarks, e == 0 ? Eye::Left : Eye::Right, s.eyes[static_cast<std::size_t>(e)].patch);
         classify(model, cut, s);
         for (int e = 0; e < 2; ++e) {
-            EyeState& eye = s.eyes[static_cast<std::size_t>(e)];
             const Eigen::Vector3f c = Eigen::Vector3f(s.centres[e].x, s.centres[e].y, s.centres[e].z) + s.offset[e];
-            seen[e].centre = R * c + t;
+            s.eyeball_sample.segment<3>(3 * e) = (R * c + t).cast<double>();
+        }
+        const Eigen::VectorXd& eyeballs = s.eyeball_smoothing(s.eyeball_sample, frame.dt);
+        for (int e = 0; e < 2; ++e) {
+            EyeState& eye = s.eyes[static_cast<std::size_t>(e)];
+            seen[e].centre = eyeballs.segment<3>(3 * e).cast<float>();
             if (!cut[e]) continue;
             float aperture = 0.f;
             model.aperture.evaluate(eye.patch.pixels, 0, 0, &aperture);
