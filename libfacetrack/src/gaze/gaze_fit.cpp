@@ -32,27 +32,54 @@ Eigen::Vector2f project(const fit::Camera& c, const Eigen::Vector3f& p) {
             static_cast<float>(c.fy) * p.y() / p.z() + static_cast<float>(c.cy)};
 }
 
-/// The projected iris as a soft indicator: 1 inside the ellipse, 0 outside,
-/// falling over about 0.7 patch pixels whatever the iris size.
+/// The projected iris as a soft indicator, 1 inside the ellipse and 0
+/// outside, falling over about 0.7 patch pixels whatever the iris size:
+///   D(q) = sigmoid(s (1 - |A (q - c)|)),  A = [a1 a2]^-1,
+/// and its derivatives with respect to the eye's yaw and pitch, from those of
+/// the centre c and of A (dA = -A dM A, M = [a1 a2]); the sharpness s is
+/// held constant in them.
 class SoftDisc {
 public:
-    bool set(const ProjectedIris& iris) {
+    /// The disc of `iris`; `moved[k]` is the disc at the angles plus h along
+    /// angle k (yaw, pitch), whose differences give the derivatives.
+    bool set(const ProjectedIris& iris, const std::array<ProjectedIris, 2>& moved, float h) {
         Eigen::Matrix2f axes;
         axes << iris.axis1, iris.axis2;
         if (!(std::fabs(axes.determinant()) > 1e-6f)) return false;
         inverse_ = axes.inverse();
         centre_ = iris.centre;
         sharpness_ = 0.5f * (iris.axis1.norm() + iris.axis2.norm()) / 0.7f;
-        return true;
+        for (std::size_t k = 0; k < 2; ++k) {
+            Eigen::Matrix2f movedAxes;
+            movedAxes << moved[k].axis1, moved[k].axis2;
+            dInverse_[k] = -inverse_ * ((movedAxes - axes) / h) * inverse_;
+            dCentre_[k] = (moved[k].centre - iris.centre) / h;
+        }
+        return inverse_.allFinite() && centre_.allFinite();
     }
-    /// The indicator along row y from column x0 on, `step` patch pixels apart, into out[0, n).
-    void row(float x0, float y, int n, float* out, int step = 1) const {
-        Eigen::Vector2f v = inverse_ * (Eigen::Vector2f(x0, y) - centre_);
-        const Eigen::Vector2f dx = static_cast<float>(step) * inverse_.col(0);
-        for (int i = 0; i < n; ++i, v += dx) {
-            const float t = sharpness_ * (1.f - v.norm());
+    /// D along row y from column x0 on, `step` patch pixels apart, into
+    /// d[0, n), and dD/dyaw, dD/dpitch into dYaw, dPitch.
+    void row(float x0, float y, int n, int step, float* d, float* dYaw, float* dPitch) const {
+        const Eigen::Vector2f q = Eigen::Vector2f(x0, y) - centre_;
+        Eigen::Vector2f v = inverse_ * q;
+        std::array<Eigen::Vector2f, 2> dv;
+        for (std::size_t k = 0; k < 2; ++k) dv[k] = dInverse_[k] * q - inverse_ * dCentre_[k];
+        const float s = static_cast<float>(step);
+        const Eigen::Vector2f dx = s * inverse_.col(0);
+        const std::array<Eigen::Vector2f, 2> ddx = {s * dInverse_[0].col(0), s * dInverse_[1].col(0)};
+        for (int i = 0; i < n; ++i, v += dx, dv[0] += ddx[0], dv[1] += ddx[1]) {
+            const float rho = v.norm();
+            const float t = sharpness_ * (1.f - rho);
             // Saturated far from the edge: exp only where the indicator is between 0 and 1.
-            out[i] = t > 12.f ? 1.f : t < -12.f ? 0.f : 1.f / (1.f + std::exp(-t));
+            if (t > 12.f || t < -12.f) {
+                d[i] = t > 0.f ? 1.f : 0.f;
+                dYaw[i] = dPitch[i] = 0.f;
+                continue;
+            }
+            d[i] = 1.f / (1.f + std::exp(-t));
+            const float slope = -d[i] * (1.f - d[i]) * sharpness_ / std::max(rho, 1e-6f);
+            dYaw[i] = slope * v.dot(dv[0]);
+            dPitch[i] = slope * v.dot(dv[1]);
         }
     }
     /// The ellipse's bounding box half-sizes.
@@ -66,7 +93,19 @@ private:
     Eigen::Matrix2f inverse_;
     Eigen::Vector2f centre_;
     float sharpness_ = 1.f;
+    std::array<Eigen::Matrix2f, 2> dInverse_;
+    std::array<Eigen::Vector2f, 2> dCentre_;
 };
+
+/// The disc of `eye` at `angles`, with its derivatives. False when the iris
+/// is behind the camera or degenerate.
+bool discAt(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles, SoftDisc& disc) {
+    constexpr float h = 0.25f * kDeg;
+    ProjectedIris iris;
+    std::array<ProjectedIris, 2> moved;
+    return projectIris(eye, R, camera, angles, iris) && projectIris(eye, R, camera, angles + Eigen::Vector2f(h, 0.f), moved[0]) &&
+           projectIris(eye, R, camera, angles + Eigen::Vector2f(0.f, h), moved[1]) && disc.set(iris, moved, h);
+}
 
 /// Iris radii of sclera around the iris's box (plus 1.5 px) in the appearance
 /// term's window: the start may be half an iris off, and the window must still
@@ -106,20 +145,30 @@ struct EyePixels {
     }
 };
 
-/// Residuals of one eye into r[0, kEyeResiduals): the classifier's maps, then the pixels of `window`.
+/// Residuals of one eye into r[0, kEyeResiduals), the classifier's maps then
+/// the pixels of `window`, and their derivatives with respect to the eye's yaw
+/// and pitch into jYaw and jPitch (the same rows). The appearance term's tones
+/// are held at their fit for this disc in the derivatives (a variable
+/// projection's usual simplification: the residuals are exact, so is the minimum).
 void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const PixelWindow& window, const Eigen::Matrix3f& R,
-                  const fit::Camera& camera, const Eigen::Vector2f& angles, float mapScale, float pixelScale, float* r) {
-    ProjectedIris iris;
+                  const fit::Camera& camera, const Eigen::Vector2f& angles, float mapScale, float pixelScale, float* r, float* jYaw,
+                  float* jPitch) {
     SoftDisc disc;
     std::fill(r, r + kEyeResiduals, 0.f);
-    if (mapScale <= 0.f || !projectIris(eye, R, camera, angles, iris) || !disc.set(iris)) return;
-    float inside[kRegionW];
+    std::fill(jYaw, jYaw + kEyeResiduals, 0.f);
+    std::fill(jPitch, jPitch + kEyeResiduals, 0.f);
+    if (mapScale <= 0.f || !discAt(eye, R, camera, angles, disc)) return;
     for (int y = 0; y < kRegionH; ++y) {
         const float* pi = eye.iris->ptr<float>(y);
         const float* po = eye.open->ptr<float>(y);
-        disc.row(static_cast<float>(kClassifiedRegion.x0), static_cast<float>(kClassifiedRegion.y(y)), kRegionW, inside,
-                 kClassifiedRegion.step);
-        for (int x = 0; x < kRegionW; ++x) r[y * kRegionW + x] = mapScale * (pi[x] - inside[x] * po[x]);
+        const int k = y * kRegionW;
+        disc.row(static_cast<float>(kClassifiedRegion.x0), static_cast<float>(kClassifiedRegion.y(y)), kRegionW, kClassifiedRegion.step,
+                 r + k, jYaw + k, jPitch + k);
+        for (int x = 0; x < kRegionW; ++x) {
+            r[k + x] = mapScale * (pi[x] - r[k + x] * po[x]);
+            jYaw[k + x] *= -mapScale * po[x];
+            jPitch[k + x] *= -mapScale * po[x];
+        }
     }
     if (pixelScale <= 0.f || window.x1 <= window.x0 || window.y1 <= window.y0) return;
     // The visible eye in two tones: the iris, uniform, inside the disc; the
@@ -127,6 +176,8 @@ void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const Pixe
     // side). The tones are the open-weighted least-squares fit for this disc
     // (a region term with the disc as its shape; w = P_open^2 keeps the lids out).
     float* q = r + kDataResiduals;
+    float* qYaw = jYaw + kDataResiduals;
+    float* qPitch = jPitch + kDataResiduals;
     Eigen::Matrix4f normal = Eigen::Matrix4f::Zero();
     Eigen::Vector4f moment = Eigen::Vector4f::Zero();
     const auto basis = [](float d, int x, int y) {
@@ -136,8 +187,9 @@ void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const Pixe
     };
     const int n = window.x1 - window.x0;
     for (int y = window.y0; y < window.y1; ++y) {
-        float* row = q + y * kPixelsW + window.x0;
-        disc.row(static_cast<float>(kClassifiedRegion.x0 + window.x0), static_cast<float>(kClassifiedRegion.y0 + y), n, row);
+        const int k0 = y * kPixelsW + window.x0;
+        disc.row(static_cast<float>(kClassifiedRegion.x0 + window.x0), static_cast<float>(kClassifiedRegion.y0 + y), n, 1, q + k0,
+                 qYaw + k0, qPitch + k0);
         for (int x = window.x0; x < window.x1; ++x) {
             const int k = y * kPixelsW + x;
             const float o = pixels.open[static_cast<std::size_t>(k)];
@@ -151,20 +203,24 @@ void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const Pixe
     for (int y = window.y0; y < window.y1; ++y) {
         for (int x = window.x0; x < window.x1; ++x) {
             const int k = y * kPixelsW + x;
-            q[k] = pixelScale * pixels.open[static_cast<std::size_t>(k)] *
-                   (pixels.intensity[static_cast<std::size_t>(k)] - basis(q[k], x, y).dot(tones));
+            const float o = pixels.open[static_cast<std::size_t>(k)];
+            // m = mu D + (1 - D) plane: dm/dD = mu - plane.
+            const float sclera = basis(0.f, x, y).dot(tones);
+            const float contrast = tones[0] - sclera;
+            q[k] = pixelScale * o * (pixels.intensity[static_cast<std::size_t>(k)] - basis(q[k], x, y).dot(tones));
+            qYaw[k] *= -pixelScale * o * contrast;
+            qPitch[k] *= -pixelScale * o * contrast;
         }
     }
 }
 
 /// The window around eye's iris at `angles`: its box and a margin of sclera.
 PixelWindow windowAround(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles) {
-    ProjectedIris iris;
     SoftDisc disc;
     PixelWindow w;
-    if (!projectIris(eye, R, camera, angles, iris) || !disc.set(iris)) return w;
+    if (!discAt(eye, R, camera, angles, disc)) return w;
     const Eigen::Vector2f reach = disc.reach();
-    if (!reach.allFinite() || !disc.centre().allFinite()) return w;
+    if (!reach.allFinite()) return w;
     const Eigen::Vector2f margin = kWindowMargin * reach + Eigen::Vector2f::Constant(1.5f);
     const Eigen::Vector2f lo = disc.centre() - margin, hi = disc.centre() + margin;
     const auto clampTo = [](float v, int n) { return std::clamp(static_cast<int>(std::lround(v)), 0, n); };
@@ -183,6 +239,18 @@ void priorResiduals(const GazeAngles& a, const GazeAngles& previous, bool havePr
             p[2 + 2 * e + k] = havePrevious ? (a[e][k] - previous[e][k]) / (s.temporal_sigma_deg * kDeg) : 0.f;
             p[6 + 2 * e + k] = a[e][k] / (s.ahead_sigma_deg * kDeg);
         }
+    }
+}
+
+/// The priors' derivatives with respect to (yaw_L, pitch_L, yaw_R, pitch_R): constant.
+template <class Rows>
+void priorJacobian(bool havePrevious, const GazeFitSettings& s, Rows&& j) {
+    j.setZero();
+    j(0, 1) = 1.f / (s.pitch_sigma_deg * kDeg), j(0, 3) = -1.f / (s.pitch_sigma_deg * kDeg);
+    j(1, 2) = 1.f / (s.vergence_sigma_deg * kDeg), j(1, 0) = -1.f / (s.vergence_sigma_deg * kDeg);
+    for (int k = 0; k < 4; ++k) {
+        j(2 + k, k) = havePrevious ? 1.f / (s.temporal_sigma_deg * kDeg) : 0.f;
+        j(6 + k, k) = 1.f / (s.ahead_sigma_deg * kDeg);
     }
 }
 
@@ -266,36 +334,28 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
         if (!guessed[e] && guessed[1 - e]) a[e] = a[1 - e];
     }
     // Per thread and sized once: a tracked frame allocates nothing here.
-    thread_local Eigen::VectorXf r0(kResiduals), r1(kResiduals);
+    thread_local Eigen::VectorXf r(kResiduals);
     thread_local Eigen::MatrixXf J(kResiduals, 4);
     thread_local std::array<EyePixels, 2> pixels;
-    constexpr float h = 0.25f * kDeg;
     std::array<float, 2> mapScale, pixelScale;
     for (int e = 0; e < 2; ++e) {
         mapScale[e] = std::sqrt(eyes[e].weight) / s.data_sigma;
         pixelScale[e] = s.pixel_sigma > 0.f ? std::sqrt(eyes[e].weight) / s.pixel_sigma : 0.f;
         if (eyes[e].weight > 0.f) pixels[e].gather(eyes[e]);
     }
-    std::array<PixelWindow, 2> window;
-    const auto residuals = [&](int e, const Eigen::Vector2f& angles, Eigen::VectorXf& r) {
-        eyeResiduals(eyes[e], pixels[e], window[e], R, camera, angles, mapScale[e], pixelScale[e], r.data() + e * kEyeResiduals);
-    };
+    // An eye's residuals depend on its own angles only: the other eye's columns stay 0 in its rows.
+    J.setZero();
+    priorJacobian(havePrevious, s, J.bottomRows(kPriorResiduals));
     for (int it = 0; it < s.iterations; ++it) {
-        for (int e = 0; e < 2; ++e) window[e] = pixelScale[e] > 0.f ? windowAround(eyes[e], R, camera, a[e]) : PixelWindow{};
-        for (int e = 0; e < 2; ++e) residuals(e, a[e], r0);
-        priorResiduals(a, previous, havePrevious, s, r0.data() + 2 * kEyeResiduals);
-        // A parameter of one eye moves only that eye's data residuals (and the priors).
-        for (int k = 0; k < 4; ++k) {
-            const int e = k / 2;
-            GazeAngles b = a;
-            b[e][k % 2] += h;
-            r1 = r0;
-            residuals(e, b[e], r1);
-            priorResiduals(b, previous, havePrevious, s, r1.data() + 2 * kEyeResiduals);
-            J.col(k) = (r1 - r0) / h;
+        for (int e = 0; e < 2; ++e) {
+            const PixelWindow window = pixelScale[e] > 0.f ? windowAround(eyes[e], R, camera, a[e]) : PixelWindow{};
+            const int row = e * kEyeResiduals;
+            eyeResiduals(eyes[e], pixels[e], window, R, camera, a[e], mapScale[e], pixelScale[e], r.data() + row,
+                         J.col(2 * e).data() + row, J.col(2 * e + 1).data() + row);
         }
+        priorResiduals(a, previous, havePrevious, s, r.data() + 2 * kEyeResiduals);
         const Eigen::Matrix4f H = J.transpose() * J + 1e-4f * Eigen::Matrix4f::Identity();
-        const Eigen::Vector4f step = -H.ldlt().solve(J.transpose() * r0);
+        const Eigen::Vector4f step = -H.ldlt().solve(J.transpose() * r);
         if (!step.allFinite()) break;
         // At most 10 degrees a step: the soft disc is only locally quadratic.
         const float largest = step.cwiseAbs().maxCoeff();
