@@ -24,7 +24,7 @@
 // predicts, whatever the classifier's map leans towards.
 // Priors: a binocular one (a shared fixation point: equal pitch, vergence
 // theta_R - theta_L near v0), a temporal one (theta_t - theta_{t-1}) and a weak
-// pull to straight ahead. A few Gauss-Newton steps (numeric Jacobian) from an
+// pull to straight ahead. A few Gauss-Newton steps (analytic Jacobian) from an
 // initial guess by back-projecting the iris probability's centroid onto the eyeball.
 
 #include "fit/camera.hpp"
