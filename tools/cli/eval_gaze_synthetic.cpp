@@ -300,7 +300,7 @@ void evalSyntheticTracked(int heads, const tools::SyntheticRenderer& renderer, T
     std::printf("  tracked (%d heads held still 30 frames, a new gaze every 5; the last frame of each fixation after 15 frames):"
                 " angular error mean %.2f p95 %.2f deg; by inter-ocular 40-60 / 60-80 / 80-100 / 100-120 px, mean",
                 heads, mean(all), percentile(all, 0.95));
-    for (const auto& e : errors) std::printf(" %.2f", mean(e));
+    for (const auto& e : errors) e.empty() ? std::printf(" -") : std::printf(" %.2f", mean(e));
     std::printf(" deg\n");
 }
 
@@ -369,6 +369,7 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
     for (int b = 0; b < 4; ++b) {
         const auto& e = errors[static_cast<std::size_t>(b)];
         all.insert(all.end(), e.begin(), e.end());
+        if (e.empty()) continue;
         std::printf("  inter-ocular %3.0f-%3.0f px: angular error mean %.2f p95 %.2f deg (%zu eyes)\n", bins[static_cast<std::size_t>(b)],
                     bins[static_cast<std::size_t>(b) + 1], mean(e), percentile(e, 0.95), e.size());
     }
