@@ -131,6 +131,31 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
     }
 }
 
+TEST(Cli, AnUnreadableImageIsAnErrorAndAFolderGoesOnPastOne) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string dir = test::tempPath("unreadable");
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/a_broken.jpg") << "not a JPEG";
+    for (const char* command : {"detect", "landmarks", "track"}) {
+        const CliRun single = runCli(std::string(command) + " '" + dir + "/a_broken.jpg'");
+        EXPECT_EQ(single.exit_code, 1) << command << ": " << single.err;
+        EXPECT_NE(single.err.find("cannot read image '" + dir + "/a_broken.jpg'"), std::string::npos) << command << ": " << single.err;
+    }
+    // Only broken files in the folder: nothing to work on is an error too.
+    const CliRun none = runCli("detect '" + dir + "'");
+    EXPECT_EQ(none.exit_code, 1) << none.err;
+    EXPECT_NE(none.err.find("none of the 1 images in the folder could be read"), std::string::npos) << none.err;
+    // With a readable image beside it, the broken one is reported and the folder goes on.
+    std::filesystem::copy_file(test::sharedDir() + "/data/faces300w/lfpw/testset/image_0001.jpg", dir + "/b_face.jpg");
+    const CliRun folder = runCli("detect '" + dir + "'");
+    EXPECT_EQ(folder.exit_code, 0) << folder.err;
+    EXPECT_NE(folder.err.find("skipping unreadable image '" + dir + "/a_broken.jpg'"), std::string::npos) << folder.err;
+    const auto lines = jsonLines(folder.out);
+    ASSERT_EQ(lines.size(), 1u) << folder.out;
+    EXPECT_EQ(lines[0]["image"], dir + "/b_face.jpg");
+    std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, HelpExitsZero) {
     EXPECT_EQ(runCli("--help").exit_code, 0);
     EXPECT_EQ(runCli("detect --help").exit_code, 0);

@@ -41,6 +41,7 @@ MediaReader MediaReader::open(const std::string& path) {
         if (reader.images_.empty()) throw Error("no images (.jpg, .png, ...) in folder '" + path + "'");
     } else if (isImageFile(path)) {
         reader.images_ = {path};
+        reader.single_image_ = true;
     } else {
         reader.video_.open(path, cv::CAP_FFMPEG);
         if (!reader.video_.isOpened()) throw Error("cannot read '" + path + "' as an image or a video");
@@ -97,7 +98,10 @@ ReadStatus MediaReader::read(MediaFrame& frame) {
         const std::string& path = images_[next_image_++];
         frame.bgr = cv::imread(path, cv::IMREAD_COLOR);
         if (frame.bgr.empty()) {
+            // The one image asked for is the whole input; in a folder, one bad file is reported and passed over.
+            if (single_image_) throw Error("cannot read image '" + path + "' (not an image, or damaged)");
             std::cerr << "facetrack: skipping unreadable image '" << path << "'\n";
+            ++unreadable_images_;
             continue;
         }
         frame.source = path;
@@ -105,6 +109,8 @@ ReadStatus MediaReader::read(MediaFrame& frame) {
         frame.time_s = frame.index;
         return ReadStatus::Frame;
     }
+    if (!images_.empty() && unreadable_images_ == images_.size())
+        throw Error("none of the " + std::to_string(images_.size()) + " images in the folder could be read");
     return ReadStatus::End;
 }
 

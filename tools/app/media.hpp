@@ -32,8 +32,9 @@ public:
 
     /// The next frame. A camera's frame is a view of the reader's buffer,
     /// valid until the next call; clone it to keep it. Unreadable images in a
-    /// folder are reported on stderr and skipped. Timeout and Disconnected
-    /// come from cameras only.
+    /// folder are reported on stderr and skipped; a single image that cannot
+    /// be read, or a folder none of whose images can, throws Error. Timeout
+    /// and Disconnected come from cameras only.
     ReadStatus read(MediaFrame& frame);
     /// read(), with a camera's timeout or disconnection thrown as Error: false at the end.
     bool next(MediaFrame& frame);
@@ -52,6 +53,8 @@ private:
     CapturedFrame captured_;
     std::vector<std::string> images_;
     std::size_t next_image_ = 0;
+    std::size_t unreadable_images_ = 0;
+    bool single_image_ = false;  ///< one image named, not a folder
     cv::VideoCapture video_;
     std::string video_name_;
     double fps_ = 0.0;
