@@ -199,6 +199,41 @@ TEST(Tracker, DetectsOnceThenFollowsWithLandmarksPoseAndExpression) {
     }
 }
 
+// Four trackers on four threads, one shared set of models, the whole pipeline:
+// each gives exactly what one tracker gives alone (no state shared by accident,
+// e.g. the stages' per-thread scratch buffers).
+TEST(Tracker, FourThreadsGiveWhatOneGivesAlone) {
+    FACETRACK_REQUIRE_PIPELINE();
+    const Models models = Models::loadDefault();
+    const auto frames = clipFrames(20);
+    using Trace = std::vector<float>;
+    auto run = [&](Trace& trace) {
+        Tracker tracker(models);
+        for (std::size_t i = 0; i < frames.size(); ++i) {
+            const FrameResult r = tracker.process(core::viewOf(frames[i]), i / 25.0);
+            trace.push_back(static_cast<float>(r.faces.size()));
+            for (const FaceResult& f : r.faces) {
+                for (const Point2& p : f.landmarks.value_or(Landmarks68{})) trace.insert(trace.end(), {p.x, p.y});
+                if (f.pose) trace.insert(trace.end(), {f.pose->rotation.w, f.pose->rotation.x, f.pose->translation_mm.z});
+                if (f.expression) trace.insert(trace.end(), f.expression->arkit.begin(), f.expression->arkit.end());
+                if (f.gaze)
+                    for (const EyeGaze* g : {&f.gaze->left, &f.gaze->right})
+                        trace.insert(trace.end(), {g->yaw_deg, g->pitch_deg, g->openness, g->pupil_px.x, g->pupil_px.y});
+            }
+        }
+    };
+    Trace alone;
+    run(alone);
+    std::array<Trace, 4> threaded;
+    {
+        std::vector<std::thread> threads;
+        for (Trace& t : threaded) threads.emplace_back(run, std::ref(t));
+        for (std::thread& t : threads) t.join();
+    }
+    ASSERT_GT(alone.size(), frames.size() * 100) << "the pipeline gave too little to compare";
+    for (const Trace& t : threaded) EXPECT_EQ(t, alone);
+}
+
 // The face leaves (frames blanked) and comes back: no face while it is away,
 // re-detected as soon as it returns, under a new id.
 TEST(Tracker, ReDetectsAfterTheFaceLeavesAndComesBack) {
