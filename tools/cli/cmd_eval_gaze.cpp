@@ -11,6 +11,7 @@
 #include "eval_gaze_synthetic.hpp"
 
 #include "core/environment.hpp"
+#include "core/pts.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -119,7 +120,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
     const std::string root = tools::faces300wRoot("");
     const auto teacher = tools::readTeacher(shared + "/data/teacher/faces300w_iris.jsonl");
     Tracker tracker(models, config);
-    std::vector<double> errors;
+    std::vector<double> errors, cornerErrors;
     std::vector<std::pair<const tools::TeacherRecord*, FaceResult>> faces;
     FrameResult result;
     std::vector<double> apertures;
@@ -138,6 +139,16 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
                                           0.5 * (l[36].y + l[39].y) - t->second.right.iris_centre.y);
             if (off > 0.3 * corners) continue;
             faces.emplace_back(&t->second, f);
+            // Where the eyeballs are placed from: the tracker's eye-corner midpoint against the
+            // annotation's, along the eye (ground truth: the 300-W annotators' points).
+            const core::Shape2 truth = core::readPts(image.pts);
+            const double iod = std::hypot(truth(0, 45) - truth(0, 36), truth(1, 45) - truth(1, 36));
+            for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
+                const int o = gaze::outerCorner(e), i = gaze::innerCorner(e);
+                const double ax = truth(0, i) - truth(0, o), ay = truth(1, i) - truth(1, o);
+                const double dx = 0.5 * (l[o].x + l[i].x - truth(0, o) - truth(0, i)), dy = 0.5 * (l[o].y + l[i].y - truth(1, o) - truth(1, i));
+                cornerErrors.push_back(100.0 * std::fabs(dx * ax + dy * ay) / std::hypot(ax, ay) / iod);
+            }
             for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) apertures.push_back(t->second.eye(e).aperture());
         }
     }
@@ -151,9 +162,10 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
             errors.push_back(std::hypot(p.x - c.x, p.y - c.y) / corners);
         }
     }
-    std::printf("300-W %s: pupil error mean %.4f p95 %.4f outer-eye-corner distances (%zu open eyes of %zu faces)\n",
+    std::printf("300-W %s: pupil error mean %.4f p95 %.4f outer-eye-corner distances (%zu open eyes of %zu faces); "
+                "eye-corner midpoint along the eye, against the annotation, mean %.2f %% of the inter-ocular distance\n",
                 split == tools::Split::Test ? "test" : "validation", mean(errors), percentile(errors, 0.95), errors.size(),
-                faces.size());
+                faces.size(), mean(cornerErrors));
 }
 
 }  // namespace
