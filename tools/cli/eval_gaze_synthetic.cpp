@@ -64,7 +64,7 @@ double rotationAngleDeg(const Quaternion& a, const Quaternion& b) {
 /// the head pose's and landmarks'.
 class TrueGeometryFit {
 public:
-    TrueGeometryFit(const Models& models) : face_(models.face), eyes_(models.eyes), rigs_(EyeRig::both(*models.face)) {
+    explicit TrueGeometryFit(const Models& models) : face_(models.face), eyes_(models.eyes), rigs_(EyeRig::both(*models.face)) {
         if (eyes_ && !eyes_->data().iris_net.empty()) net_.emplace(eyes_->data().iris_net, "eye model's iris net");
     }
 

@@ -145,19 +145,34 @@ struct EyePixels {
     }
 };
 
-/// Residuals of one eye into r[0, kEyeResiduals), the classifier's maps then
-/// the pixels of `window`, and their derivatives with respect to the eye's yaw
+/// The window around the disc: its box and a margin of sclera.
+PixelWindow windowAround(const SoftDisc& disc) {
+    PixelWindow w;
+    const Eigen::Vector2f reach = disc.reach();
+    if (!reach.allFinite()) return w;
+    const Eigen::Vector2f margin = kWindowMargin * reach + Eigen::Vector2f::Constant(1.5f);
+    const Eigen::Vector2f lo = disc.centre() - margin, hi = disc.centre() + margin;
+    const auto clampTo = [](float v, int n) { return std::clamp(static_cast<int>(std::lround(v)), 0, n); };
+    w.x0 = clampTo(lo.x() - static_cast<float>(kClassifiedRegion.x0), kPixelsW);
+    w.x1 = clampTo(hi.x() - static_cast<float>(kClassifiedRegion.x0) + 1.f, kPixelsW);
+    w.y0 = clampTo(lo.y() - static_cast<float>(kClassifiedRegion.y0), kPixelsH);
+    w.y1 = clampTo(hi.y() - static_cast<float>(kClassifiedRegion.y0) + 1.f, kPixelsH);
+    return w;
+}
+
+/// Residuals of one eye into r[0, kEyeResiduals) for the iris `disc` (null:
+/// none seen, all 0), the classifier's maps then the pixels of the window about
+/// it, and their derivatives with respect to the eye's yaw
 /// and pitch into jYaw and jPitch (the same rows). The appearance term's tones
 /// are held at their fit for this disc in the derivatives (a variable
 /// projection's usual simplification: the residuals are exact, so is the minimum).
-void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const PixelWindow& window, const Eigen::Matrix3f& R,
-                  const fit::Camera& camera, const Eigen::Vector2f& angles, float mapScale, float pixelScale, float* r, float* jYaw,
-                  float* jPitch) {
-    SoftDisc disc;
+void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const SoftDisc* seen, float mapScale, float pixelScale, float* r,
+                  float* jYaw, float* jPitch) {
     std::fill(r, r + kEyeResiduals, 0.f);
     std::fill(jYaw, jYaw + kEyeResiduals, 0.f);
     std::fill(jPitch, jPitch + kEyeResiduals, 0.f);
-    if (mapScale <= 0.f || !discAt(eye, R, camera, angles, disc)) return;
+    if (!seen) return;
+    const SoftDisc& disc = *seen;
     for (int y = 0; y < kRegionH; ++y) {
         const float* pi = eye.iris->ptr<float>(y);
         const float* po = eye.open->ptr<float>(y);
@@ -170,7 +185,9 @@ void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const Pixe
             jPitch[k + x] *= -mapScale * po[x];
         }
     }
-    if (pixelScale <= 0.f || window.x1 <= window.x0 || window.y1 <= window.y0) return;
+    if (pixelScale <= 0.f) return;
+    const PixelWindow window = windowAround(disc);
+    if (window.x1 <= window.x0 || window.y1 <= window.y0) return;
     // The visible eye in two tones: the iris, uniform, inside the disc; the
     // sclera outside, a plane (a shaded eyeball is brighter on the light's
     // side). The tones are the open-weighted least-squares fit for this disc
@@ -212,23 +229,6 @@ void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const Pixe
             qPitch[k] *= -pixelScale * o * contrast;
         }
     }
-}
-
-/// The window around eye's iris at `angles`: its box and a margin of sclera.
-PixelWindow windowAround(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles) {
-    SoftDisc disc;
-    PixelWindow w;
-    if (!discAt(eye, R, camera, angles, disc)) return w;
-    const Eigen::Vector2f reach = disc.reach();
-    if (!reach.allFinite()) return w;
-    const Eigen::Vector2f margin = kWindowMargin * reach + Eigen::Vector2f::Constant(1.5f);
-    const Eigen::Vector2f lo = disc.centre() - margin, hi = disc.centre() + margin;
-    const auto clampTo = [](float v, int n) { return std::clamp(static_cast<int>(std::lround(v)), 0, n); };
-    w.x0 = clampTo(lo.x() - static_cast<float>(kClassifiedRegion.x0), kPixelsW);
-    w.x1 = clampTo(hi.x() - static_cast<float>(kClassifiedRegion.x0) + 1.f, kPixelsW);
-    w.y0 = clampTo(lo.y() - static_cast<float>(kClassifiedRegion.y0), kPixelsH);
-    w.y1 = clampTo(hi.y() - static_cast<float>(kClassifiedRegion.y0) + 1.f, kPixelsH);
-    return w;
 }
 
 void priorResiduals(const GazeAngles& a, const GazeAngles& previous, bool havePrevious, const GazeFitSettings& s, float* p) {
@@ -348,9 +348,10 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
     priorJacobian(havePrevious, s, J.bottomRows(kPriorResiduals));
     for (int it = 0; it < s.iterations; ++it) {
         for (int e = 0; e < 2; ++e) {
-            const PixelWindow window = pixelScale[e] > 0.f ? windowAround(eyes[e], R, camera, a[e]) : PixelWindow{};
+            SoftDisc disc;
+            const bool seen = mapScale[e] > 0.f && discAt(eyes[e], R, camera, a[e], disc);
             const int row = e * kEyeResiduals;
-            eyeResiduals(eyes[e], pixels[e], window, R, camera, a[e], mapScale[e], pixelScale[e], r.data() + row,
+            eyeResiduals(eyes[e], pixels[e], seen ? &disc : nullptr, mapScale[e], pixelScale[e], r.data() + row,
                          J.col(2 * e).data() + row, J.col(2 * e + 1).data() + row);
         }
         priorResiduals(a, previous, havePrevious, s, r.data() + 2 * kEyeResiduals);
