@@ -1,5 +1,5 @@
 // Landmarks for one face from its detector box, on one core: facetrack's LBF
-// against OpenCV's FacemarkLBF trained on the same data (tools/train_facemark;
+// (one start, and the tracker's default number of starts averaged) against OpenCV's FacemarkLBF trained on the same data (tools/train_facemark;
 // its model is found at FACETRACK_FACEMARK_MODEL, else build/facemark_lbf.yaml),
 // and the whole 640x480 frame -> detect -> landmarks path through the Tracker.
 
@@ -46,6 +46,20 @@ void BM_Landmarks_FacetrackLbf(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_Landmarks_FacetrackLbf)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+/// The tracker's default: the cascade from TrackerConfig::landmark_starts starts, averaged.
+void BM_Landmarks_FacetrackLbfDefaultStarts(benchmark::State& state) {
+    const FaceInput in = faceInput();
+    if (skipWithoutShared(state, in.bgr)) return;
+    const auto model = LandmarkModel::loadDefault();
+    const int starts = TrackerConfig{}.landmark_starts;
+    state.SetLabel(std::to_string(starts) + " starts");
+    for (auto _ : state) {
+        const auto init = landmarks::shapeFromBox(model->data(), in.box, "yunet");
+        benchmark::DoNotOptimize(landmarks::alignFromStarts(model->data(), in.gray, init, starts));
+    }
+}
+BENCHMARK(BM_Landmarks_FacetrackLbfDefaultStarts)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 void BM_Landmarks_OpenCvFacemarkLbf(benchmark::State& state) {
     const FaceInput in = faceInput();

@@ -3,6 +3,7 @@
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/landmark_model.hpp"
+#include "facetrack/tracker.hpp"
 #include "landmarks/lbf.hpp"
 #include "landmarks/lbf_trainer.hpp"
 #include "core/image.hpp"
@@ -23,6 +24,8 @@ namespace fs = std::filesystem;
 // Mean NME the shipped model must stay under on the first 40 lfpw test faces
 // (measured value in docs/benchmarks.md, plus a margin for other machines).
 constexpr double kShippedNmeBound = 0.065;
+/// The tracker's default number of averaged starts.
+const int kTrackerStarts = TrackerConfig{}.landmark_starts;
 
 /// A drawn "face": 68 points on an ellipse-and-features template, randomly
 /// placed, scaled, rotated and deformed, rendered as dots on a textured background.
@@ -228,7 +231,7 @@ TEST(ShippedLandmarkModel, StaysAccurateOnHeldOutFaces) {
     config.kind = DetectorKind::YuNet;
     auto detector = createFaceDetector(config);
     const std::string dir = test::sharedDir() + "/data/faces300w/lfpw/testset";
-    double sum = 0;
+    double sum = 0, sumStarts = 0;
     int count = 0;
     for (int k = 1; k <= 40; ++k) {
         char stem[32];
@@ -240,14 +243,63 @@ TEST(ShippedLandmarkModel, StaysAccurateOnHeldOutFaces) {
         ASSERT_FALSE(found.empty()) << stem;
         cv::Mat gray;
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-        const Shape68 fitted =
-            alignLandmarks(model->data(), gray, shapeFromBox(model->data(), found[0].box, "yunet"));
+        const Shape68 start = shapeFromBox(model->data(), found[0].box, "yunet");
+        const Shape68 fitted = alignLandmarks(model->data(), gray, start);
+        // One start through alignFromStarts is the plain cascade.
+        EXPECT_EQ(alignFromStarts(model->data(), gray, start, 1), fitted);
         sum += core::nme68(core::Shape2(fitted), truth);
+        sumStarts += core::nme68(core::Shape2(alignFromStarts(model->data(), gray, start, kTrackerStarts)), truth);
         ++count;
     }
     ASSERT_GE(count, 30);
-    std::printf("shipped LBF on %d lfpw test faces: mean NME %.2f%%\n", count, 100 * sum / count);
+    std::printf("shipped LBF on %d lfpw test faces: mean NME %.2f%% from one start, %.2f%% from %d\n", count, 100 * sum / count,
+                100 * sumStarts / count, kTrackerStarts);
     EXPECT_LT(sum / count, kShippedNmeBound);
+    EXPECT_LT(sumStarts / count, sum / count) << "averaged starts are no less accurate";
+}
+
+// Averaged starts jitter less: the same faces under fresh pixel noise (sigma 2
+// grey levels) each time, started from the same shape, as a tracker sees a still face.
+TEST(ShippedLandmarkModel, AveragedStartsJitterLessUnderPixelNoise) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string path = test::sourceDir() + "/models/landmarks_lbf.ftm";
+    if (!fs::exists(path)) GTEST_SKIP() << "models/landmarks_lbf.ftm is not shipped";
+    const auto model = LandmarkModel::load(path);
+    const std::string dir = test::sharedDir() + "/data/faces300w/lfpw/testset";
+    std::array<double, 2> spread{};  // one start, the tracker's starts: RMS deviation from the mean answer
+    int faces = 0;
+    for (int k = 1; k <= 8; ++k) {
+        char stem[32];
+        std::snprintf(stem, sizeof stem, "/image_%04d", k);
+        if (!fs::exists(dir + stem + ".jpg")) continue;
+        cv::Mat gray = cv::imread(dir + stem + ".jpg", cv::IMREAD_GRAYSCALE);
+        const core::Shape2 truth = core::readPts(dir + stem + ".pts");
+        const Shape68 start = alignLandmarks(model->data(), gray, Shape68(truth));
+        const float eyes = (truth.col(36) - truth.col(45)).norm();
+        for (const int n : {1, kTrackerStarts}) {
+            std::vector<Shape68> answers;
+            cv::RNG noiseRng(static_cast<std::uint64_t>(k));  // the same noise for both counts
+            for (int trial = 0; trial < 12; ++trial) {
+                cv::Mat noise(gray.size(), CV_32F), noisy;
+                noiseRng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
+                cv::Mat grayF;
+                gray.convertTo(grayF, CV_32F);
+                cv::Mat(grayF + noise).convertTo(noisy, CV_8U);
+                answers.push_back(alignFromStarts(model->data(), noisy, start, n));
+            }
+            Shape68 mean = Shape68::Zero();
+            for (const auto& a : answers) mean += a / static_cast<float>(answers.size());
+            double squares = 0;
+            for (const auto& a : answers) squares += (a - mean).squaredNorm() / (eyes * eyes) / kLandmarks;
+            spread[n == 1 ? 0 : 1] += squares / static_cast<double>(answers.size());
+        }
+        ++faces;
+    }
+    ASSERT_GE(faces, 6);
+    const double one = std::sqrt(spread[0] / faces), several = std::sqrt(spread[1] / faces);
+    std::printf("landmark spread under pixel noise, eye-corner distances: one start %.4f, %d starts %.4f\n", one, kTrackerStarts, several);
+    EXPECT_GT(one, 0.0) << "the noise moved nothing: the test measures nothing";
+    EXPECT_LT(several, 0.8 * one);
 }
 
 }  // namespace

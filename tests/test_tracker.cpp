@@ -102,6 +102,11 @@ TEST(Tracker, BadSetupAndBadFramesGiveErrors) {
         c.expression_prior = prior;
         EXPECT_THROW(Tracker(faceOnly(), c), Error) << prior;
     }
+    for (const int starts : {0, 10, -1}) {
+        TrackerConfig c;
+        c.landmark_starts = starts;
+        EXPECT_THROW(Tracker(faceOnly(), c), Error) << starts;
+    }
     Tracker tracker(faceOnly());
     EXPECT_THROW(tracker.process(ImageView{}, 0.0), Error);
     const std::uint8_t pixel[3] = {0, 0, 0};

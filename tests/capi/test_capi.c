@@ -5,6 +5,7 @@
 #include "facetrack/facetrack.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,6 +44,16 @@ static void checkErrorsAndNulls(const ft_models* models) {
     config.expression_prior = 0.0f;
     CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_ERROR && tracker == NULL);
     CHECK(strstr(error, "expression_prior") != NULL);
+    ft_tracker_config_init(&config);
+    CHECK(config.landmark_starts == 5);
+    config.landmark_starts = 10;
+    CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_ERROR && tracker == NULL);
+    CHECK(strstr(error, "landmark_starts") != NULL);
+    /* An older caller, whose config ends before landmark_starts: the default, not the garbage after its struct. */
+    config.struct_size = (uint32_t)offsetof(ft_tracker_config, landmark_starts);
+    CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_OK && tracker != NULL);
+    ft_tracker_destroy(tracker);
+    tracker = NULL;
     CHECK(ft_tracker_create(models, NULL, &tracker, NULL, 0) == FT_OK && tracker != NULL);
     ft_frame_result frame;
     frame.struct_size = sizeof frame;

@@ -23,6 +23,7 @@ TrackerConfig trackerConfig(const Args& args) {
     config.camera.focal_length_px = args.number("--focal", config.camera.focal_length_px);
     config.calibration_frames = static_cast<int>(args.number("--calibration-frames", config.calibration_frames));
     config.expression_prior = static_cast<float>(args.number("--expression-prior", config.expression_prior));
+    config.landmark_starts = static_cast<int>(args.number("--landmark-starts", config.landmark_starts));
     config.filter.enabled = !args.has("--no-filter");
     config.filter.min_cutoff_hz = args.number("--filter-cutoff", config.filter.min_cutoff_hz);
     config.filter.beta = args.number("--filter-beta", config.filter.beta);

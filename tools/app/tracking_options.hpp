@@ -17,9 +17,10 @@ inline const std::set<std::string> kDetectorOptions = {"--detector", "--yunet", 
 DetectorConfig detectorConfig(const Args& args);
 
 /// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --expression-prior F,
-/// --filter-cutoff HZ, --filter-beta B, --cnn FILE|none, --eyes FILE|none, and the flag --no-filter.
+/// --landmark-starts N, --filter-cutoff HZ, --filter-beta B, --cnn FILE|none, --eyes FILE|none, and the flag --no-filter.
 inline const std::set<std::string> kTrackerOptions = {"--max-faces", "--fov", "--focal", "--calibration-frames",
-                                                      "--expression-prior", "--filter-cutoff", "--filter-beta", "--cnn", "--eyes"};
+                                                      "--expression-prior", "--landmark-starts", "--filter-cutoff", "--filter-beta",
+                                                      "--cnn", "--eyes"};
 inline const std::set<std::string> kTrackerFlags = {"--no-filter"};
 TrackerConfig trackerConfig(const Args& args);
 

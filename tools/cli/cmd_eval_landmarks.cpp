@@ -28,7 +28,7 @@ namespace {
 
 const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
                                 [--cascade FILE] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
-                                [--plot ced.png] [--max-error 0.08]
+                                [--plot ced.png] [--max-error 0.08] [--landmark-starts N]
 Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
 YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
 root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
@@ -37,7 +37,8 @@ Methods, side by side with the same boxes:
                            landmark net (--cascade, default: the shipped cnn_cascade.ftm when it
                            has one; --lbf-only leaves it out); a face whose fit does not hold
                            keeps LBF's landmarks (counted as "dropped")
-  facetrack LBF            --model (default: the shipped landmarks_lbf.ftm)
+  facetrack LBF, N starts  --model (default: the shipped landmarks_lbf.ftm) from --landmark-starts N
+                           starts, averaged (default 5, the tracker's), and from one start
   OpenCV FacemarkLBF       --facemark FILE, a model trained by tools' train_facemark
   dlib shape_predictor     --dlib FILE (default /usr/share/dlib/shape_predictor_68_face_landmarks.dat)
 Prints per method: faces, mean and median NME (300-W: mean point error over the
@@ -57,10 +58,10 @@ struct Method {
         : name(std::move(n)), fit(std::move(f)) {}
 };
 
-Method ourLbf(std::shared_ptr<const LandmarkModel> model) {
-    return {"facetrack LBF", [model](const cv::Mat&, const cv::Mat& gray, const Box& box) {
-                return Shape2(landmarks::alignLandmarks(model->data(), gray,
-                                                        landmarks::shapeFromBox(model->data(), box, "yunet")));
+Method ourLbf(std::shared_ptr<const LandmarkModel> model, int starts) {
+    return {"facetrack LBF, " + std::to_string(starts) + (starts == 1 ? " start" : " starts"),
+            [model, starts](const cv::Mat&, const cv::Mat& gray, const Box& box) {
+                return Shape2(landmarks::alignFromStarts(model->data(), gray, landmarks::shapeFromBox(model->data(), box, "yunet"), starts));
             }};
 }
 
@@ -103,7 +104,8 @@ Method dlibShapePredictor(const std::string& path, bool seenInTraining) {
 }  // namespace
 
 int runEvalLandmarks(const std::vector<std::string>& argv) {
-    const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet"}, {"--help", "--lbf-only"});
+    const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts"},
+                    {"--help", "--lbf-only"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -116,7 +118,11 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
 
     std::vector<Method> methods;
     const auto lbf = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
-    auto pipeline = std::make_shared<StillLandmarks>(lbf, args.get("--cascade", ""), args.has("--lbf-only"));
+    const int starts = static_cast<int>(args.number("--landmark-starts", TrackerConfig{}.landmark_starts));
+    if (starts < 1 || starts > landmarks::kMaxLandmarkStarts) {
+        throw Error("--landmark-starts must be in 1.." + std::to_string(landmarks::kMaxLandmarkStarts));
+    }
+    auto pipeline = std::make_shared<StillLandmarks>(lbf, args.get("--cascade", ""), args.has("--lbf-only"), "yunet", starts);
     int dropped = 0;
     if (pipeline->usesPipeline()) {
         methods.emplace_back(pipeline->method(), [pipeline, &dropped](const cv::Mat& bgr, const cv::Mat& gray, const Box& box) {
@@ -126,7 +132,8 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             return Shape2(landmarks::fromLandmarks68(points));
         });
     }
-    methods.push_back(ourLbf(lbf));
+    methods.push_back(ourLbf(lbf, starts));
+    if (starts != 1) methods.push_back(ourLbf(lbf, 1));
     if (args.has("--facemark")) methods.push_back(facemarkLbf(args.get("--facemark")));
     const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
     if (dlibPath != "none" && fs::exists(dlibPath)) {

@@ -229,7 +229,6 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
     for (int i = 0; i < 15; ++i) {
         const FaceResult* f = step(sequenceFace(model, 80, 0, -25, 0, 0, 500u + static_cast<unsigned>(i)));
         if (f && i >= 5) downBlink = std::max(downBlink, static_cast<double>(std::max(blinkOf(*f, "eyeBlinkLeft"), blinkOf(*f, "eyeBlinkRight"))));
-        if (f && std::getenv("DBG_DOWN")) std::printf("DBG %d pitch L %.1f R %.1f open %.2f %.2f head pitch %.1f\n", i, f->gaze->left.pitch_deg, f->gaze->right.pitch_deg, f->gaze->left.openness, f->gaze->right.openness, f->pose->euler_deg.x);
     }
     std::printf("  looking down 25 deg: largest eyeBlink %.2f (a blink is >= 0.5)\n", downBlink);
     // A wink: the left eye closed, the right open.

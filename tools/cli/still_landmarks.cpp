@@ -8,8 +8,8 @@
 namespace facetrack::cli {
 
 StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
-                               const std::string& boxPrior)
-    : lbf_(std::move(lbf)), method_("facetrack LBF"), box_prior_(boxPrior) {
+                               const std::string& boxPrior, int starts)
+    : lbf_(std::move(lbf)), method_("facetrack LBF"), box_prior_(boxPrior), starts_(starts) {
     if (lbfOnly) return;
     std::error_code ec;
     const std::string path = cascadePath.empty() ? CnnModel::defaultPath() : cascadePath;
@@ -22,6 +22,7 @@ StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const s
     TrackerConfig still;
     still.filter.enabled = false;
     still.max_faces = 1;
+    still.landmark_starts = starts;
     still.detector.kind = boxPrior == "cascade" ? DetectorKind::Cascade : DetectorKind::YuNet;  // its kind picks LBF's box prior
     tracker_ = std::make_unique<Tracker>(Models{FaceModel::loadDefault(), lbf_, nullptr, std::move(cascade)}, still);
     method_ = "facetrack LBF + fit + CNN";
@@ -35,7 +36,8 @@ Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Bo
         if (!result_.faces.empty() && result_.faces[0].landmarks) return *result_.faces[0].landmarks;
         if (dropped) *dropped = true;
     }
-    return landmarks::toLandmarks68(landmarks::alignLandmarks(lbf_->data(), gray, landmarks::shapeFromBox(lbf_->data(), box, box_prior_)));
+    return landmarks::toLandmarks68(
+        landmarks::alignFromStarts(lbf_->data(), gray, landmarks::shapeFromBox(lbf_->data(), box, box_prior_), starts_));
 }
 
 }  // namespace facetrack::cli

@@ -18,8 +18,9 @@ public:
     /// `cascadePath`: a CNN cascade file, or "" for the shipped one when it
     /// exists. `lbfOnly`, or no cascade with a landmark net: LBF alone.
     /// `boxPrior`: the detector whose boxes are given, "yunet" or "cascade".
+    /// `starts`: LBF from that many starts, averaged (TrackerConfig::landmark_starts).
     StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
-                   const std::string& boxPrior = "yunet");
+                   const std::string& boxPrior = "yunet", int starts = TrackerConfig{}.landmark_starts);
 
     /// What the landmarks are: "LBF + fit + CNN" or "LBF".
     const std::string& method() const { return method_; }
@@ -34,6 +35,7 @@ private:
     std::unique_ptr<Tracker> tracker_;
     FrameResult result_;
     std::string method_, box_prior_;
+    int starts_;
 };
 
 }  // namespace facetrack::cli

@@ -87,6 +87,11 @@ struct TrackerConfig {
     /// labels, docs/expressions.md): below 1 the expressions respond more and
     /// a relaxed face reads less relaxed; above 1 the other way. In (0, 100].
     float expression_prior = 1.0f;
+    /// The landmark regression runs from this many starts a few pixels apart
+    /// and averages them, 1..9: each start costs one more landmark pass (about
+    /// 0.2 ms on one core), and five jitter about half as much as one
+    /// (docs/landmarks.md).
+    int landmark_starts = 5;
 };
 
 /// One Tracker follows the faces of one video stream. It is not thread-safe:

@@ -109,6 +109,7 @@ void ft_tracker_config_init(ft_tracker_config* config) {
     config->filter_beta = static_cast<float>(defaults.filter.beta);
     config->calibration_frames = defaults.calibration_frames;
     config->expression_prior = defaults.expression_prior;
+    config->landmark_starts = defaults.landmark_starts;
 }
 
 ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* config, ft_tracker** out, char* error,
@@ -140,6 +141,7 @@ ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* co
         t.filter.beta = c.filter_beta;
         t.calibration_frames = c.calibration_frames;
         t.expression_prior = c.expression_prior;
+        t.landmark_starts = c.landmark_starts;
         *out = new ft_tracker{facetrack::Tracker(models->models, t), {}, {}};
     });
     writeError(error, error_size, message);

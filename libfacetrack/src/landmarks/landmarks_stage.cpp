@@ -32,12 +32,14 @@ bool hasTexture(const cv::Mat& gray, const Box& box) {
 
 class LandmarksStage final : public pipeline::Stage {
 public:
-    LandmarksStage(std::shared_ptr<const LandmarkModel> model, std::string detectorKind)
-        : model_(std::move(model)), detector_kind_(std::move(detectorKind)) {}
+    LandmarksStage(std::shared_ptr<const LandmarkModel> model, std::string detectorKind, int starts)
+        : model_(std::move(model)), detector_kind_(std::move(detectorKind)), starts_(starts) {}
 
     StageInfo info() const override {
         if (!model_) return {"landmarks", false, "not available: no landmark model loaded"};
-        return {"landmarks", true, "LBF, " + std::to_string(model_->stageCount()) + " stages (" + model_->sourcePath() + ")"};
+        return {"landmarks", true,
+                "LBF, " + std::to_string(model_->stageCount()) + " stages, " + std::to_string(starts_) + " starts averaged (" +
+                    model_->sourcePath() + ")"};
     }
 
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {
@@ -49,7 +51,7 @@ public:
         const Shape68 start = face.fresh || !face.next_start
                                   ? shapeFromBox(lbf, face.box, detector_kind_)
                                   : fromLandmarks68(*face.next_start);
-        const Shape68 shape = alignLandmarks(lbf, frame.gray, start);
+        const Shape68 shape = alignFromStarts(lbf, frame.gray, start, starts_);
         if (!shape.allFinite()) return false;
         face.result.landmarks = toLandmarks68(shape);
         face.locate(boundsOf(shape));
@@ -64,12 +66,13 @@ public:
 private:
     std::shared_ptr<const LandmarkModel> model_;
     std::string detector_kind_;
+    int starts_;
 };
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeLandmarksStage(std::shared_ptr<const LandmarkModel> model, std::string detectorKind) {
-    return std::make_unique<LandmarksStage>(std::move(model), std::move(detectorKind));
+std::unique_ptr<pipeline::Stage> makeLandmarksStage(std::shared_ptr<const LandmarkModel> model, std::string detectorKind, int starts) {
+    return std::make_unique<LandmarksStage>(std::move(model), std::move(detectorKind), starts);
 }
 
 }  // namespace facetrack::landmarks

@@ -61,6 +61,24 @@ Shape68 alignLandmarks(const LbfModel& model, const cv::Mat& gray, Shape68 shape
     return shape;
 }
 
+Shape68 alignFromStarts(const LbfModel& model, const cv::Mat& gray, const Shape68& start, int starts) {
+    static constexpr float kDiagonal = 0.70710678f;
+    static constexpr std::array<std::array<float, 2>, kMaxLandmarkStarts> kDirections = {{
+        {0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1},
+        {kDiagonal, kDiagonal}, {-kDiagonal, -kDiagonal}, {kDiagonal, -kDiagonal}, {-kDiagonal, kDiagonal}}};
+    starts = std::clamp(starts, 1, kMaxLandmarkStarts);
+    const float shift = kStartShift * (start.col(36) - start.col(45)).norm();
+    Shape68 sum = Shape68::Zero();
+    for (int k = 0; k < starts; ++k) {
+        const auto& d = kDirections[static_cast<std::size_t>(k)];
+        Shape68 shape = start;
+        shape.row(0).array() += shift * d[0];
+        shape.row(1).array() += shift * d[1];
+        sum += alignLandmarks(model, gray, shape);
+    }
+    return sum / static_cast<float>(starts);
+}
+
 Landmarks68 toLandmarks68(const Shape68& shape) {
     Landmarks68 out;
     for (int i = 0; i < kLandmarks; ++i) out[i] = {shape(0, i), shape(1, i)};

@@ -55,6 +55,20 @@ void applyStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gra
 /// The full cascade from an initial shape. `gray` is 8-bit, one channel.
 Shape68 alignLandmarks(const LbfModel& model, const cv::Mat& gray, Shape68 shape);
 
+/// How many starts alignFromStarts takes at most: the start and eight shifted copies.
+constexpr int kMaxLandmarkStarts = 9;
+/// The shift of alignFromStarts' copies, a share of the start's outer-eye-corner distance.
+constexpr float kStartShift = 0.04f;
+
+/// The cascade from N starts, averaged (N in 1..kMaxLandmarkStarts):
+///   S = (1/N) sum_k align(S_0 + s d_k),  s = kStartShift |p_36 - p_45| of S_0,
+/// d_0 = 0, then the unit directions +x, -x, +y, -y and the four diagonals.
+/// Why: a tree's leaf flips with a grey level of noise, so one start's answer
+/// jumps from frame to frame; starts a few pixels apart reach other leaves and
+/// their mean jumps less, and it is a little closer to the truth
+/// (docs/landmarks.md: jitter, NME and the cost, N times one start).
+Shape68 alignFromStarts(const LbfModel& model, const cv::Mat& gray, const Shape68& start, int starts);
+
 /// The shape as the public API's landmark array, and back.
 Landmarks68 toLandmarks68(const Shape68& shape);
 Shape68 fromLandmarks68(const Landmarks68& points);

@@ -8,6 +8,7 @@
 #include "fit/fit_stage.hpp"
 #include "gaze/gaze_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
+#include "landmarks/lbf.hpp"
 #include "track/tracker_core.hpp"
 
 #include <filesystem>
@@ -52,6 +53,9 @@ void validate(const Models& models, const TrackerConfig& config) {
     if (!(config.expression_prior > 0.f && config.expression_prior <= 100.f)) {
         throw Error("TrackerConfig::expression_prior must be in (0, 100]");
     }
+    if (config.landmark_starts < 1 || config.landmark_starts > landmarks::kMaxLandmarkStarts) {
+        throw Error("TrackerConfig::landmark_starts must be in 1.." + std::to_string(landmarks::kMaxLandmarkStarts));
+    }
     const FilterConfig& f = config.filter;
     if (!(f.min_cutoff_hz > 0.0) || !(f.beta >= 0.0) || !(f.derivative_cutoff_hz > 0.0)) {
         throw Error("TrackerConfig::filter: cutoffs must be positive and beta not negative");
@@ -63,7 +67,7 @@ void validate(const Models& models, const TrackerConfig& config) {
 /// The stage list: the order of execution, of stages() and of the timings.
 pipeline::StageList stageList(const Models& models, const TrackerConfig& config, const FaceDetector& detector) {
     pipeline::StageList stages;
-    stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind()));
+    stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind(), config.landmark_starts));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}, models.landmarks != nullptr));
     stages.push_back(cnn::makeCnnStage(models.cnn, models.face, models.landmarks != nullptr));
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
