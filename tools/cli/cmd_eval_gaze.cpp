@@ -130,18 +130,17 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
         const cv::Mat bgr = cv::imread(image.image, cv::IMREAD_COLOR);
         tracker.reset();
         tracker.process(tools::viewOf(bgr), 0.0, result);
+        const core::Shape2 truth = core::readPts(image.pts);
+        const Eigen::Vector2f centroid = truth.rowwise().mean();
         for (const auto& f : result.faces) {
             if (!f.gaze || !f.landmarks) continue;
             const Landmarks68& l = *f.landmarks;
-            // The annotated face: the teacher's irises near our eye corners.
-            const double corners = std::hypot(l[45].x - l[36].x, l[45].y - l[36].y);
-            const double off = std::hypot(0.5 * (l[36].x + l[39].x) - t->second.right.iris_centre.x,
-                                          0.5 * (l[36].y + l[39].y) - t->second.right.iris_centre.y);
-            if (off > 0.3 * corners) continue;
+            // The annotated face: the tracked face whose box holds the annotation's centroid
+            // (a rule that does not depend on how well our landmarks did).
+            if (!(centroid.x() >= f.box.x0 && centroid.x() <= f.box.x1 && centroid.y() >= f.box.y0 && centroid.y() <= f.box.y1)) continue;
             faces.emplace_back(&t->second, f);
             // Where the eyeballs are placed from: the tracker's eye-corner midpoint against the
             // annotation's, along the eye (ground truth: the 300-W annotators' points).
-            const core::Shape2 truth = core::readPts(image.pts);
             const double iod = std::hypot(truth(0, 45) - truth(0, 36), truth(1, 45) - truth(1, 36));
             for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
                 const int o = gaze::outerCorner(e), i = gaze::innerCorner(e);
