@@ -24,15 +24,22 @@ namespace {
 constexpr float kDeg = 3.14159265358979f / 180.f;
 constexpr int kRegionW = kClassifiedRegion.columns();
 constexpr int kRegionH = kClassifiedRegion.rows();
-/// The open-eye reference: a running 70th percentile of the aperture, moved by this much a frame.
+/// The open-eye reference: a running 70th percentile of the aperture, moved by
+/// kReferenceStep a frame; on a new face's n-th frame by kReferenceStep *
+/// max(1, kReferenceWarmup / n) (a stochastic-approximation schedule), so it
+/// reaches this face's own opening in about a second instead of several: with
+/// the fixed step, a face whose eyes open wider than the model's read as
+/// eyeWide 0.6 at first, falling over 40 frames.
 constexpr float kReferenceQuantile = 0.7f;
 constexpr float kReferenceStep = 0.002f;
+constexpr float kReferenceWarmup = 20.f;
 
 struct EyeState {
     EyePatch patch;
     // Not brace-initialised: cv::Mat{a, b, c} is an initializer-list matrix of three values.
     cv::Mat iris = cv::Mat(kRegionH, kRegionW, CV_32F), open = cv::Mat(kRegionH, kRegionW, CV_32F);
     float reference = 0.f;  // the face's open-eye aperture
+    int samples = 0;        // apertures the reference has seen
 };
 
 /// The output's 1-euro filter, on yaw and pitch in degrees: a fixation is held
@@ -134,7 +141,10 @@ public:
 
     void resetCalibration(pipeline::StageState* state) const override {
         auto& s = static_cast<GazeFaceState&>(*state);
-        for (auto& e : s.eyes) e.reference = eyes_->data().open_aperture;
+        for (auto& e : s.eyes) {
+            e.reference = eyes_->data().open_aperture;
+            e.samples = 0;
+        }
         s.have_centres = false;
         s.have_offset = false;
         s.smoothing.reset();
@@ -183,7 +193,8 @@ public:
             ratio[e] = (aperture - closed) / (expected - closed);
             openness[e] = std::clamp(ratio[e], 0.f, 1.f);
             // The reference tracks this face's open-eye aperture (a quantile, robust to blinks).
-            eye.reference += kReferenceStep * (aperture > eye.reference ? kReferenceQuantile : kReferenceQuantile - 1.f);
+            const float step = kReferenceStep * std::max(1.f, kReferenceWarmup / static_cast<float>(++eye.samples));
+            eye.reference += step * (aperture > eye.reference ? kReferenceQuantile : kReferenceQuantile - 1.f);
             eye.reference = std::clamp(eye.reference, closed + 0.6f * (model.open_aperture - closed),
                                        closed + 1.6f * (model.open_aperture - closed));
             seen[e].patch = &eye.patch;
