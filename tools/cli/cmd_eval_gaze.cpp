@@ -10,6 +10,7 @@
 #include "common/teacher.hpp"
 #include "eval_gaze_synthetic.hpp"
 
+#include "core/box.hpp"
 #include "core/environment.hpp"
 #include "core/pts.hpp"
 #include "facetrack/facetrack.hpp"
@@ -135,9 +136,9 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
         for (const auto& f : result.faces) {
             if (!f.gaze || !f.landmarks) continue;
             const Landmarks68& l = *f.landmarks;
-            // The annotated face: the tracked face whose box holds the annotation's centroid
-            // (a rule that does not depend on how well our landmarks did).
-            if (!(centroid.x() >= f.box.x0 && centroid.x() <= f.box.x1 && centroid.y() >= f.box.y0 && centroid.y() <= f.box.y1)) continue;
+            // The annotated face: the tracked face whose box holds the annotation's centroid (a
+            // coarse rule, so faces whose eye landmarks went wrong are counted too).
+            if (!core::contains(f.box, centroid.x(), centroid.y())) continue;
             faces.emplace_back(&t->second, f);
             // Where the eyeballs are placed from: the tracker's eye-corner midpoint against the
             // annotation's, along the eye (ground truth: the 300-W annotators' points).
