@@ -393,9 +393,11 @@ TEST(OpenSeeFace, PacketLayoutAndValuesMatchTheTracker) {
         EXPECT_EQ(read<std::int32_t>(d, at), face.id);
         EXPECT_EQ(read<float>(d, at), static_cast<float>(frame.camera.width));
         EXPECT_EQ(read<float>(d, at), static_cast<float>(frame.camera.height));
+        // Eye openness: the gaze stage's, else 1 - eyeBlink.
         const float rightOpen = read<float>(d, at), leftOpen = read<float>(d, at);
-        EXPECT_FLOAT_EQ(rightOpen, 1.f - face.expression->arkit[static_cast<std::size_t>(arkitIndex("eyeBlinkRight"))]);
-        EXPECT_FLOAT_EQ(leftOpen, 1.f - face.expression->arkit[static_cast<std::size_t>(arkitIndex("eyeBlinkLeft"))]);
+        const auto blink = [&](const char* name) { return face.expression->arkit[static_cast<std::size_t>(arkitIndex(name))]; };
+        EXPECT_FLOAT_EQ(rightOpen, face.gaze ? face.gaze->right.openness : 1.f - blink("eyeBlinkRight"));
+        EXPECT_FLOAT_EQ(leftOpen, face.gaze ? face.gaze->left.openness : 1.f - blink("eyeBlinkLeft"));
         EXPECT_EQ(read<std::uint8_t>(d, at), 1);
         EXPECT_GE(read<float>(d, at), 0.f);
         const float qx = read<float>(d, at), qy = read<float>(d, at), qz = read<float>(d, at), qw = read<float>(d, at);

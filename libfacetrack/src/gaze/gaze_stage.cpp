@@ -33,6 +33,13 @@ constexpr int kRegionH = kClassifiedRegion.rows();
 constexpr float kReferenceQuantile = 0.7f;
 constexpr float kReferenceStep = 0.002f;
 constexpr float kReferenceWarmup = 20.f;
+/// An eye is data for the gaze fit from this openness (the forest's reading)
+/// on, fully 0.25 above it. A closing lid covers the iris from above and would
+/// drag the gaze down; too high a bar, and an eye looking down, its lids
+/// lowered, gives no data, so the gaze holds its pitch and the eye reads as
+/// closing (docs/gaze.md: 0.6 read a look-down after looking ahead as eyeBlink
+/// 0.70; 0.45 reads it as 0.47 and moves the gaze 0.00 deg across a blink).
+constexpr float kDataFromOpenness = 0.45f;
 
 struct EyeState {
     EyePatch patch;
@@ -200,11 +207,10 @@ public:
             seen[e].patch = &eye.patch;
             seen[e].iris = &eye.iris;
             seen[e].open = &eye.open;
-            // Only a clearly open eye is data: a closing lid covers the iris from above and would drag
-            // the gaze down. Judged by the forest's reading alone (with the average, 300-W's pupil p95
-            // rose from 0.048 to 0.051).
+            // Data only from an open eye (kDataFromOpenness), judged by the forest's reading alone
+            // (with the average, 300-W's pupil p95 rose from 0.048 to 0.051).
             const float forestOpenness = (forestAperture - closed) / (expected - closed);
-            seen[e].weight = std::clamp((forestOpenness - 0.6f) / 0.25f, 0.f, 1.f);
+            seen[e].weight = std::clamp((forestOpenness - kDataFromOpenness) / 0.25f, 0.f, 1.f);
         }
         const fit::Camera& camera = frame.camera;
         // Both eyes closed: the output holds exactly (the filter is not fed, so it does not catch up meanwhile).
