@@ -68,14 +68,19 @@ Shape68 alignFromStarts(const LbfModel& model, const cv::Mat& gray, const Shape6
         {kDiagonal, kDiagonal}, {-kDiagonal, -kDiagonal}, {kDiagonal, -kDiagonal}, {-kDiagonal, kDiagonal}}};
     starts = std::clamp(starts, 1, kMaxLandmarkStarts);
     const float shift = kStartShift * (start.col(36) - start.col(45)).norm();
-    Shape68 sum = Shape68::Zero();
+    std::array<Shape68, kMaxLandmarkStarts> shapes;
     for (int k = 0; k < starts; ++k) {
         const auto& d = kDirections[static_cast<std::size_t>(k)];
-        Shape68 shape = start;
+        Shape68& shape = shapes[static_cast<std::size_t>(k)];
+        shape = start;
         shape.row(0).array() += shift * d[0];
         shape.row(1).array() += shift * d[1];
-        sum += alignLandmarks(model, gray, shape);
     }
+    // Stage by stage, all starts: they reach many of the same leaves, whose rows are then still in cache.
+    for (const auto& stage : model.stages)
+        for (int k = 0; k < starts; ++k) applyStage(model, stage, gray, shapes[static_cast<std::size_t>(k)]);
+    Shape68 sum = Shape68::Zero();
+    for (int k = 0; k < starts; ++k) sum += shapes[static_cast<std::size_t>(k)];
     return sum / static_cast<float>(starts);
 }
 
