@@ -119,9 +119,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     std::vector<Method> methods;
     const auto lbf = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
     const int starts = static_cast<int>(args.number("--landmark-starts", TrackerConfig{}.landmark_starts));
-    if (starts < 1 || starts > landmarks::kMaxLandmarkStarts) {
-        throw Error("--landmark-starts must be in 1.." + std::to_string(landmarks::kMaxLandmarkStarts));
-    }
+    landmarks::checkStartCount(starts, "--landmark-starts");
     auto pipeline = std::make_shared<StillLandmarks>(lbf, args.get("--cascade", ""), args.has("--lbf-only"), "yunet", starts);
     int dropped = 0;
     if (pipeline->usesPipeline()) {

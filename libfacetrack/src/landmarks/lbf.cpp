@@ -1,6 +1,7 @@
 #include "landmarks/lbf.hpp"
 
 #include "core/shape2d.hpp"
+#include "facetrack/error.hpp"
 
 #include <array>
 
@@ -82,6 +83,10 @@ Shape68 alignFromStarts(const LbfModel& model, const cv::Mat& gray, const Shape6
     Shape68 sum = Shape68::Zero();
     for (int k = 0; k < starts; ++k) sum += shapes[static_cast<std::size_t>(k)];
     return sum / static_cast<float>(starts);
+}
+
+void checkStartCount(int starts, const std::string& what) {
+    if (starts < 1 || starts > kMaxLandmarkStarts) throw Error(what + " must be in 1.." + std::to_string(kMaxLandmarkStarts));
 }
 
 Landmarks68 toLandmarks68(const Shape68& shape) {

@@ -68,6 +68,8 @@ constexpr float kStartShift = 0.04f;
 /// their mean jumps less, and it is a little closer to the truth
 /// (docs/landmarks.md: jitter, NME and the cost, N times one start).
 Shape68 alignFromStarts(const LbfModel& model, const cv::Mat& gray, const Shape68& start, int starts);
+/// Throws Error "`what` must be in 1..kMaxLandmarkStarts" unless `starts` is.
+void checkStartCount(int starts, const std::string& what);
 
 /// The shape as the public API's landmark array, and back.
 Landmarks68 toLandmarks68(const Shape68& shape);

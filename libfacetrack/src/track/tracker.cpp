@@ -53,9 +53,7 @@ void validate(const Models& models, const TrackerConfig& config) {
     if (!(config.expression_prior > 0.f && config.expression_prior <= 100.f)) {
         throw Error("TrackerConfig::expression_prior must be in (0, 100]");
     }
-    if (config.landmark_starts < 1 || config.landmark_starts > landmarks::kMaxLandmarkStarts) {
-        throw Error("TrackerConfig::landmark_starts must be in 1.." + std::to_string(landmarks::kMaxLandmarkStarts));
-    }
+    landmarks::checkStartCount(config.landmark_starts, "TrackerConfig::landmark_starts");
     const FilterConfig& f = config.filter;
     if (!(f.min_cutoff_hz > 0.0) || !(f.beta >= 0.0) || !(f.derivative_cutoff_hz > 0.0)) {
         throw Error("TrackerConfig::filter: cutoffs must be positive and beta not negative");
