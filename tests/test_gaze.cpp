@@ -23,16 +23,18 @@
 #include <filesystem>
 #include <cstring>
 #include <fstream>
+#include <numeric>
 
 namespace facetrack {
 namespace {
 
 using namespace gaze;
 constexpr float kDeg = 3.14159265f / 180.f;
-/// On single renders of a frontal face. The target is 3 degrees mean;
-/// the pixel forest's maps on renders give about 8 (docs/benchmarks.md, "Eyes"),
-/// so this bound catches breakage (a flipped axis is tens of degrees), not the target.
-constexpr double kRenderGazeToleranceDeg = 15.0;
+/// On single renders of a frontal face: the targets are 3 degrees mean
+/// and 6 p95 (eval-gaze, 400 renders: 2.95 / 7.0 in session 12); the worst of
+/// these 8 eyes was 3.5 then, so 7 catches a regression of the eyeballs'
+/// placement (without the corner cascade: 15), not only a flipped axis.
+constexpr double kRenderGazeToleranceDeg = 7.0;
 
 #define FACETRACK_REQUIRE_EYE_MODEL()                                                        \
     do {                                                                                     \
@@ -68,6 +70,45 @@ TEST(EyePatch, PutsTheCornersAtFixedPointsAndMirrorsTheLeftEye) {
     // An eye at the frame's border: the border repeats, nothing is read outside.
     EXPECT_TRUE(cutEyePatch(gray, {-20, 5}, {15, -3}, false, p));
     EXPECT_TRUE(cv::checkRange(p.pixels));
+}
+
+/// A one-tree forest of depth 1 whose two leaves both hold `offsets`.
+PatchForest constantCornerForest(const std::array<float, 4>& offsets) {
+    PatchForest f;
+    f.depth = 1;
+    f.outputs = 4;
+    f.splits.resize(1);
+    f.leaves.assign(offsets.begin(), offsets.end());
+    f.leaves.insert(f.leaves.end(), offsets.begin(), offsets.end());
+    return f;
+}
+
+TEST(EyeCorners, EachStageMovesTheCornersByItsReadingAndReCuts) {
+    cv::Mat gray(200, 300, CV_8U, cv::Scalar(100));
+    EyePatch patch, scratch;
+    // A level right eye 56 px wide: 2 frame pixels per patch pixel.
+    ASSERT_TRUE(cutEyePatch(gray, {100, 50}, {156, 50}, false, patch));
+    EyeModelData model;
+    auto c = eyeCorners(model, gray, patch, scratch);  // no stages: where the patch was cut
+    EXPECT_NEAR(c[0].x, 100.f, 1e-3f);
+    EXPECT_NEAR(c[1].x, 156.f, 1e-3f);
+    model.corner_stages.push_back(constantCornerForest({1.f, 0.5f, -1.f, 0.f}));
+    c = eyeCorners(model, gray, patch, scratch);
+    EXPECT_NEAR(c[0].x, 102.f, 1e-3f);
+    EXPECT_NEAR(c[0].y, 51.f, 1e-3f);
+    EXPECT_NEAR(c[1].x, 154.f, 1e-3f);
+    EXPECT_NEAR(c[1].y, 50.f, 1e-3f);
+    // A second stage reads a patch re-cut at the first one's corners (52 px wide: 52 / 28 px per patch pixel).
+    model.corner_stages.push_back(constantCornerForest({0.f, 0.f, 1.f, 0.f}));
+    c = eyeCorners(model, gray, patch, scratch);
+    EXPECT_NEAR(c[0].x, 102.f, 1e-3f);
+    EXPECT_NEAR(c[1].x, 154.f + 52.f / kEyeWidth, 1e-3f);
+    // The subject's left eye is mirrored: +x in its patch is towards the nose, the image's left.
+    ASSERT_TRUE(cutEyePatch(gray, {156, 50}, {100, 50}, true, patch));
+    model.corner_stages.resize(1);
+    c = eyeCorners(model, gray, patch, scratch);
+    EXPECT_NEAR(c[0].x, 154.f, 1e-3f);
+    EXPECT_NEAR(c[1].x, 102.f, 1e-3f);
 }
 
 TEST(PatchForest, TrainingLearnsAPixelRuleAndEvaluatesIt) {
@@ -132,6 +173,8 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     EXPECT_EQ(back.open_aperture, m.open_aperture);
     EXPECT_EQ(back.closed_aperture, m.closed_aperture);
     EXPECT_EQ(back.provenance, m.provenance);
+    ASSERT_EQ(back.corner_stages.size(), m.corner_stages.size());
+    for (std::size_t k = 0; k < m.corner_stages.size(); ++k) EXPECT_EQ(back.corner_stages[k].leaves, m.corner_stages[k].leaves);
 
     const auto expectError = [&](const std::string& path, const std::string& words) {
         try {
@@ -156,6 +199,13 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     EXPECT_THROW(writeEyeModel(copy, bad), Error);
     bad = m;
     bad.closed_aperture = bad.open_aperture + 0.1f;
+    EXPECT_THROW(writeEyeModel(copy, bad), Error);
+    bad = m;
+    bad.corner_stages.push_back(constantCornerForest({0, 0, 0, 0}));
+    bad.corner_stages.back().outputs = 2;  // a corner stage reads four numbers
+    bad.corner_stages.back().leaves.resize(4);
+    EXPECT_THROW(writeEyeModel(copy, bad), Error);
+    bad.corner_stages.assign(kMaxCornerStages + 1, constantCornerForest({0, 0, 0, 0}));
     EXPECT_THROW(writeEyeModel(copy, bad), Error);
     std::filesystem::remove(copy);
 }
@@ -192,7 +242,7 @@ TEST(IrisNet, ReadsEachRegionCellFromItsOwnPatchPixel) {
     EXPECT_THROW(IrisNet(test::fixtureBytes("cnn_parity.onnx"), "the cascade's net"), Error);
 }
 
-TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionOne) {
+TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneAndTwo) {
     FACETRACK_REQUIRE_EYE_MODEL();
     EyeModelData m = readEyeModel(test::sourceDir() + "/models/eye_model.ftm");
     m.iris_net = test::fixtureBytes("iris_net_fixture.onnx");
@@ -215,18 +265,21 @@ TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionOne) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("iris net"), std::string::npos) << e.what();
     }
-    // Version 1 (no iris net): the payload without its last string.
-    {
-        EyeModelData v1 = m;
-        v1.iris_net.clear();
-        writeEyeModel(path, v1);
-        std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
-        payload.resize(payload.size() - sizeof(std::uint32_t));  // the empty string's length
-        core::writeModelFile(path, kEyeModelMagic, 1, payload);
+    // Versions 2 (no corner stages) and 1 (no iris net either): the payload without its last
+    // byte (the stage count, 0) and then without the empty iris net's length.
+    EyeModelData plain = m;
+    plain.iris_net.clear();
+    plain.corner_stages.clear();
+    writeEyeModel(path, plain);
+    std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
+    for (const std::uint32_t version : {2u, 1u}) {
+        payload.resize(payload.size() - (version == 2 ? 1 : sizeof(std::uint32_t)));
+        core::writeModelFile(path, kEyeModelMagic, version, payload);
+        const EyeModelData old = readEyeModel(path);
+        EXPECT_TRUE(old.iris_net.empty());
+        EXPECT_TRUE(old.corner_stages.empty());
+        EXPECT_EQ(old.pixels.leaves, m.pixels.leaves);
     }
-    const EyeModelData old = readEyeModel(path);
-    EXPECT_TRUE(old.iris_net.empty());
-    EXPECT_EQ(old.pixels.leaves, m.pixels.leaves);
     std::filesystem::remove(path);
 }
 
@@ -414,6 +467,51 @@ TEST_F(GazeOnRenders, RecoversKnownGaze) {
         }
     }
     std::printf("worst angular error on 4 renders: %.2f deg\n", worst);
+}
+
+/// The eyeballs are placed from the corner cascade's corners: on renders (other
+/// than those it trained on) they must be nearer the true ones than the
+/// landmarks' are. Measured over 400 renders: 2.5 -> about 1 % of the
+/// inter-ocular distance (eval-gaze).
+TEST_F(GazeOnRenders, TheCornerCascadeFindsTheEyeCorners) {
+    const EyeModelData& model = models_.eyes->data();
+    ASSERT_FALSE(model.corner_stages.empty()) << "the shipped eye model has no corner cascade";
+    std::vector<double> landmarkError, refinedError;
+    for (const float headYaw : {-20.f, 0.f, 20.f}) {
+        for (const auto& g : std::vector<std::array<float, 2>>{{0, 0}, {15, 5}, {-15, -5}}) {
+            tools::SyntheticFace f = face(g[0], g[1]);
+            const Eigen::Quaternionf q = Eigen::Quaternionf(0.f, 1.f, 0.f, 0.f) * Eigen::AngleAxisf(headYaw * kDeg, Eigen::Vector3f::UnitY());
+            f.rotation = {q.w(), q.x(), q.y(), q.z()};
+            tracker_->reset();
+            const cv::Mat image = renderer_->render(f);
+            FrameResult r;
+            tracker_->process(core::viewOf(image), 0.0, {renderer_->faceBox(f)}, r);
+            ASSERT_EQ(r.faces.size(), 1u);
+            ASSERT_TRUE(r.faces[0].landmarks);
+            cv::Mat gray;
+            cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+            const Landmarks68 truth = renderer_->landmarks(f);
+            const Landmarks68& l = *r.faces[0].landmarks;
+            const float iod = renderer_->interocularPx(f);
+            for (const Eye eye : {Eye::Left, Eye::Right}) {
+                const auto o = static_cast<std::size_t>(outerCorner(eye)), i = static_cast<std::size_t>(innerCorner(eye));
+                const auto midpointError = [&](Point2 outer, Point2 inner) {
+                    return 100.0 * std::hypot(0.5f * (outer.x + inner.x - truth[o].x - truth[i].x),
+                                              0.5f * (outer.y + inner.y - truth[o].y - truth[i].y)) / iod;
+                };
+                EyePatch patch, scratch;
+                ASSERT_TRUE(cutEyePatch(gray, l, eye, patch));
+                const auto c = eyeCorners(model, gray, patch, scratch);
+                landmarkError.push_back(midpointError(l[o], l[i]));
+                refinedError.push_back(midpointError(c[0], c[1]));
+            }
+        }
+    }
+    const auto mean = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); };
+    std::printf("eye-corner midpoint error on 9 renders: landmarks %.2f %%, corner cascade %.2f %% of the inter-ocular distance\n",
+                mean(landmarkError), mean(refinedError));
+    EXPECT_LT(mean(refinedError), 0.75 * mean(landmarkError));
+    EXPECT_LT(mean(refinedError), 2.0);
 }
 
 TEST_F(GazeOnRenders, AWinkIsOneEyeAndBothClosedHoldTheGaze) {

@@ -10,12 +10,16 @@
 #include "common/teacher.hpp"
 #include "eval_gaze_synthetic.hpp"
 
+#include "gaze/eye_model_data.hpp"
+#include "gaze/eye_patch.hpp"
+
 #include "core/box.hpp"
 #include "core/environment.hpp"
 #include "core/pts.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <algorithm>
@@ -121,7 +125,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
     const std::string root = tools::faces300wRoot("");
     const auto teacher = tools::readTeacher(shared + "/data/teacher/faces300w_iris.jsonl");
     Tracker tracker(models, config);
-    std::vector<double> errors, cornerErrors;
+    std::vector<double> errors, cornerErrors, refinedErrors;
     std::vector<std::pair<const tools::TeacherRecord*, FaceResult>> faces;
     FrameResult result;
     std::vector<double> apertures;
@@ -129,6 +133,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
         const auto t = teacher.find(std::filesystem::relative(image.image, root).string());
         if (t == teacher.end()) continue;
         const cv::Mat bgr = cv::imread(image.image, cv::IMREAD_COLOR);
+        cv::Mat gray;
         tracker.reset();
         tracker.process(tools::viewOf(bgr), 0.0, result);
         const core::Shape2 truth = core::readPts(image.pts);
@@ -142,12 +147,21 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
             faces.emplace_back(&t->second, f);
             // Where the eyeballs are placed from: the tracker's eye-corner midpoint against the
             // annotation's, along the eye (ground truth: the 300-W annotators' points).
+            // Both the landmarks' corners and the eye model's corner cascade's (what places them).
             const double iod = std::hypot(truth(0, 45) - truth(0, 36), truth(1, 45) - truth(1, 36));
+            if (gray.empty()) cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
             for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
                 const int o = gaze::outerCorner(e), i = gaze::innerCorner(e);
                 const double ax = truth(0, i) - truth(0, o), ay = truth(1, i) - truth(1, o);
-                const double dx = 0.5 * (l[o].x + l[i].x - truth(0, o) - truth(0, i)), dy = 0.5 * (l[o].y + l[i].y - truth(1, o) - truth(1, i));
-                cornerErrors.push_back(100.0 * std::fabs(dx * ax + dy * ay) / std::hypot(ax, ay) / iod);
+                const auto alongTheEye = [&](Point2 outer, Point2 inner) {
+                    const double dx = 0.5 * (outer.x + inner.x - truth(0, o) - truth(0, i)), dy = 0.5 * (outer.y + inner.y - truth(1, o) - truth(1, i));
+                    return 100.0 * std::fabs(dx * ax + dy * ay) / std::hypot(ax, ay) / iod;
+                };
+                cornerErrors.push_back(alongTheEye(l[o], l[i]));
+                gaze::EyePatch patch, scratch;
+                if (!gaze::cutEyePatch(gray, l, e, patch)) continue;
+                const auto refined = gaze::eyeCorners(models.eyes->data(), gray, patch, scratch);
+                refinedErrors.push_back(alongTheEye(refined[0], refined[1]));
             }
             for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) apertures.push_back(t->second.eye(e).aperture());
         }
@@ -163,9 +177,10 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
         }
     }
     std::printf("300-W %s: pupil error mean %.4f p95 %.4f outer-eye-corner distances (%zu open eyes of %zu faces); "
-                "eye-corner midpoint along the eye, against the annotation, mean %.2f %% of the inter-ocular distance\n",
+                "eye-corner midpoint along the eye, against the annotation, mean %.2f %% of the inter-ocular distance "
+                "(landmarks), %.2f %% (corner cascade)\n",
                 split == tools::Split::Test ? "test" : "validation", mean(errors), percentile(errors, 0.95), errors.size(),
-                faces.size(), mean(cornerErrors));
+                faces.size(), mean(cornerErrors), mean(refinedErrors));
 }
 
 }  // namespace

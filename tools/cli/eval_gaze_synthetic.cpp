@@ -323,6 +323,7 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
     const std::array<float, 5> bins = {40, 60, 80, 100, 120};
     std::array<std::vector<double>, 4> errors;
     std::vector<double> yawBias, pitchBias, headErrors, exactErrors, classifiedErrors, cornerErrors, cornerShiftX;
+    std::array<std::vector<double>, 2> landmarkErrors, refinedErrors;  // per eye: the corner midpoint's error, % of the inter-ocular distance
     TrueGeometryFit trueGeometry(models);
     int failed = 0;
     FrameResult result;
@@ -360,13 +361,22 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
             // corners' midpoint is from the render's, and what that does to the gaze.
             const Landmarks68 truth = renderer.landmarks(f);
             const float iod = renderer.interocularPx(f);
+            cv::Mat gray;
+            cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
             for (int e = 0; e < 2; ++e) {
-                const std::size_t outer = e == 0 ? 45 : 36, inner = e == 0 ? 42 : 39;
+                const gaze::Eye eye = e == 0 ? gaze::Eye::Left : gaze::Eye::Right;
+                const auto outer = static_cast<std::size_t>(gaze::outerCorner(eye)), inner = static_cast<std::size_t>(gaze::innerCorner(eye));
                 const Landmarks68& l = *face.landmarks;
                 const double dx = 0.5 * (l[outer].x + l[inner].x - truth[outer].x - truth[inner].x);
                 const double dy = 0.5 * (l[outer].y + l[inner].y - truth[outer].y - truth[inner].y);
                 cornerErrors.push_back(100.0 * std::hypot(dx, dy) / iod);
                 cornerShiftX.push_back(dx / iod);
+                gaze::EyePatch patch, scratch;
+                if (!gaze::cutEyePatch(gray, l, eye, patch)) continue;
+                const auto refined = gaze::eyeCorners(models.eyes->data(), gray, patch, scratch);
+                refinedErrors[e].push_back(100.0 * std::hypot(0.5 * (refined[0].x + refined[1].x - truth[outer].x - truth[inner].x),
+                                                              0.5 * (refined[0].y + refined[1].y - truth[outer].y - truth[inner].y)) / iod);
+                landmarkErrors[e].push_back(cornerErrors.back());
             }
         }
     }
@@ -390,6 +400,9 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
     std::printf("  the tracker's eye-corner midpoint (where the eyeball is placed from) is %.2f %% of the inter-ocular distance "
                 "from the render's on average; its horizontal error correlates with the gaze's, r = %.2f\n",
                 mean(cornerErrors), cornerShiftX.size() == yawBias.size() ? pearson(cornerShiftX, yawBias) : std::nan(""));
+    std::printf("  the eye-corner midpoint, subject's left / right eye: landmarks %.2f / %.2f %%, refined by the eye model's corner "
+                "cascade (what places the eyeballs) %.2f / %.2f %%\n",
+                mean(landmarkErrors[0]), mean(landmarkErrors[1]), mean(refinedErrors[0]), mean(refinedErrors[1]));
     evalSyntheticTracked(std::max(1, renders / 4), renderer, tracker);
     evalSyntheticSequences(renderer, tracker, *models.face);
 }

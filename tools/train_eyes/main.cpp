@@ -16,7 +16,9 @@
 #include "gaze/forest_training.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/box.hpp"
 #include "core/environment.hpp"
+#include "core/pts.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <Eigen/Geometry>
@@ -30,6 +32,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <numeric>
 #include <random>
 #include <sstream>
 
@@ -41,7 +44,8 @@ namespace {
 const char* kUsage = R"(usage: train_eyes [--out models/eye_model.ftm] [--holdout CLIP,CLIP]
                   [--pixel-trees N] [--pixel-depth D] [--aperture-trees N] [--aperture-depth D] [--seed S]
                   [--synthetic RENDERS] [--synthetic-pixels] [--samples-out DIR]
-                  [--iris-net NET.onnx [--from MODEL.ftm]]
+                  [--corner-trees N] [--corner-depth D] [--corner-stages K]
+                  [--corner-synthetic RENDERS] [--iris-net NET.onnx] [--from MODEL.ftm [--corners]]
 Trains the eye model on the teacher labels in ../shared/data/teacher. Held out from training:
 300-W validation and test, and the clips of --holdout (default: liveportrait_d14_gaze_shifts.mp4,
 fgnet_talking_face_franck.mp4). The aperture forest also learns from RENDERS synthetic renders of
@@ -49,8 +53,13 @@ the face model (default 2,500; exact classes and apertures; eval-gaze renders ot
 forest too with --synthetic-pixels. Reports pixel accuracy and aperture error on held-out eyes.
 --samples-out DIR writes the eye patches instead, for the iris CNN (train_iris_net.py):
 DIR/{train,validation,heldout}_{patches,classes,info}.npy, then stops.
---iris-net puts that CNN in the model, in place of the pixel forest; with --from it is added to
-an existing model (its forests kept) instead of training one.)";
+--iris-net puts that CNN in the model, in place of the pixel forest. The corner cascade (the eye
+corners refined from the patch, which place the eyeballs; default 4 stages) learns the 300-W
+annotators' corners of the train split and the exact corners of RENDERS other renders (default
+6,000), from patches cut near them; reported on 300-W validation and every tenth render, their
+patches cut where facetrack's landmarks put the corners. --from MODEL.ftm adds to an existing
+model (its forests kept) instead of training one: the iris net (--iris-net) and/or a new corner
+cascade (--corners).)";
 
 struct EyeSample {
     cv::Mat patch;
@@ -162,56 +171,72 @@ void addClip(Dataset& data, const std::string& shared, const std::map<std::strin
     }
 }
 
-/// Renders of the face model (tools/common/synthetic_face.hpp) with exact pixel
-/// classes: eyes at every gaze, head pose and size, which the teacher's data has
-/// few of. Their parameters come from their own generator (`seed`), not the
-/// one eval-gaze's renders use.
-void addSynthetic(Dataset& data, int renders, unsigned seed, std::mt19937& jitter) {
+/// A random render for training (its own generator, not eval-gaze's): head
+/// pose, size, gaze, blinks, skin, iris, lashes, light, noise and blur.
+tools::SyntheticFace randomTrainingFace(std::mt19937& rng, const std::vector<std::string>& names, unsigned seed) {
+    std::uniform_real_distribution<float> unit(0.f, 1.f);
+    const auto in = [&](float lo, float hi) { return lo + (hi - lo) * unit(rng); };
+    const auto index = [&](const std::string& n) { return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin()); };
+    tools::SyntheticFace f;
+    const float iod = in(35, 140);
+    f.translation_mm = {in(-40, 40), in(-30, 30), f.fx * 62.3f / iod};
+    const Eigen::Quaternionf q = Eigen::Quaternionf(0.f, 1.f, 0.f, 0.f) *
+                                 Eigen::AngleAxisf(in(-35, 35) * 0.01745f, Eigen::Vector3f::UnitY()) *
+                                 Eigen::AngleAxisf(in(-15, 15) * 0.01745f, Eigen::Vector3f::UnitX()) *
+                                 Eigen::AngleAxisf(in(-10, 10) * 0.01745f, Eigen::Vector3f::UnitZ());
+    f.rotation = {q.w(), q.x(), q.y(), q.z()};
+    const float yaw = in(-32, 32), pitch = in(-25, 22), vergence = in(0, 6);
+    f.gaze_deg = {{{yaw - vergence / 2, pitch}, {yaw + vergence / 2, pitch}}};
+    f.expression.assign(names.size(), 0.f);
+    for (const char* side : {"_L", "_R"}) {
+        f.expression[index(std::string("eyeBlink") + side)] = unit(rng) < 0.3f ? in(0.f, 1.f) : 0.f;
+        f.expression[index(std::string(pitch < 0 ? "eyeLookDown" : "eyeLookUp") + side)] = std::fabs(pitch) / 30.f * in(0.5f, 1.f);
+    }
+    f.skin = in(0.45f, 1.15f);
+    f.iris = in(0.4f, 1.8f);
+    f.lash = in(0.3f, 1.6f);
+    f.light = {in(-0.8f, 0.8f), in(-0.8f, 0.4f), -1.f};
+    f.noise_sigma = in(1.f, 5.f);
+    f.blur_sigma = in(0.f, 1.2f);
+    f.seed = seed;
+    return f;
+}
+
+/// Renders `renders` faces of randomTrainingFace (seeded by `seed`), tracks
+/// each as a new face from its box, and calls visit(renderer, face, image,
+/// exact classes, landmarks) for each the tracker found.
+template <class Visit>
+void trackTrainingRenders(int renders, unsigned seed, Visit visit) {
     const Models models = landmarkModels();
     tools::SyntheticRenderer renderer(models.face);
     TrackerConfig config = unfiltered();
     config.camera.focal_length_px = tools::SyntheticFace{}.fx;
     Tracker tracker(models, config);
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> unit(0.f, 1.f);
-    const auto in = [&](float lo, float hi) { return lo + (hi - lo) * unit(rng); };
-    const auto& names = models.face->expressionNames();
-    const auto index = [&](const std::string& n) { return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin()); };
     FrameResult result;
     for (int i = 0; i < renders; ++i) {
-        tools::SyntheticFace f;
-        const float iod = in(35, 140);
-        f.translation_mm = {in(-40, 40), in(-30, 30), f.fx * 62.3f / iod};
-        const Eigen::Quaternionf q = Eigen::Quaternionf(0.f, 1.f, 0.f, 0.f) *
-                                     Eigen::AngleAxisf(in(-35, 35) * 0.01745f, Eigen::Vector3f::UnitY()) *
-                                     Eigen::AngleAxisf(in(-15, 15) * 0.01745f, Eigen::Vector3f::UnitX()) *
-                                     Eigen::AngleAxisf(in(-10, 10) * 0.01745f, Eigen::Vector3f::UnitZ());
-        f.rotation = {q.w(), q.x(), q.y(), q.z()};
-        const float yaw = in(-32, 32), pitch = in(-25, 22), vergence = in(0, 6);
-        f.gaze_deg = {{{yaw - vergence / 2, pitch}, {yaw + vergence / 2, pitch}}};
-        f.expression.assign(names.size(), 0.f);
-        for (const char* side : {"_L", "_R"}) {
-            f.expression[index(std::string("eyeBlink") + side)] = unit(rng) < 0.3f ? in(0.f, 1.f) : 0.f;
-            f.expression[index(std::string(pitch < 0 ? "eyeLookDown" : "eyeLookUp") + side)] = std::fabs(pitch) / 30.f * in(0.5f, 1.f);
-        }
-        f.skin = in(0.45f, 1.15f);
-        f.iris = in(0.4f, 1.8f);
-        f.lash = in(0.3f, 1.6f);
-        f.light = {in(-0.8f, 0.8f), in(-0.8f, 0.4f), -1.f};
-        f.noise_sigma = in(1.f, 5.f);
-        f.blur_sigma = in(0.f, 1.2f);
-        f.seed = seed * 100003u + static_cast<unsigned>(i);
+        const tools::SyntheticFace f = randomTrainingFace(rng, models.face->expressionNames(), seed * 100003u + static_cast<unsigned>(i));
         tools::ClassMap classes;
         const cv::Mat image = renderer.render(f, &classes);
         tracker.reset();
         tracker.process(tools::viewOf(image), 0.0, {renderer.faceBox(f)}, result);
-        if (result.faces.empty() || !result.faces[0].landmarks) continue;
+        if (!result.faces.empty() && result.faces[0].landmarks) visit(renderer, f, image, classes, *result.faces[0].landmarks);
+    }
+}
+
+/// Renders of the face model (tools/common/synthetic_face.hpp) with exact pixel
+/// classes: eyes at every gaze, head pose and size, which the teacher's data has
+/// few of. Their parameters come from their own generator (`seed`), not the
+/// one eval-gaze's renders use.
+void addSynthetic(Dataset& data, int renders, unsigned seed, std::mt19937& jitter) {
+    trackTrainingRenders(renders, seed, [&](const tools::SyntheticRenderer&, const tools::SyntheticFace&, const cv::Mat& image,
+                                            const tools::ClassMap& classes, const Landmarks68& landmarks) {
         cv::Mat gray;
         cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
         for (int variant = 0; variant < 2; ++variant) {
             for (const Eye eye : {Eye::Left, Eye::Right}) {
-                Point2 outer = (*result.faces[0].landmarks)[static_cast<std::size_t>(outerCorner(eye))];
-                Point2 inner = (*result.faces[0].landmarks)[static_cast<std::size_t>(innerCorner(eye))];
+                Point2 outer = landmarks[static_cast<std::size_t>(outerCorner(eye))];
+                Point2 inner = landmarks[static_cast<std::size_t>(innerCorner(eye))];
                 if (variant == 1) {
                     const float w = std::hypot(inner.x - outer.x, inner.y - outer.y);
                     std::normal_distribution<float> n(0.f, 0.03f * w);
@@ -234,7 +259,7 @@ void addSynthetic(Dataset& data, int renders, unsigned seed, std::mt19937& jitte
                 data.eyes.push_back(std::move(s));
             }
         }
-    }
+    });
 }
 
 int pixelClassOf(const EyeSample& e, int x, int y) {
@@ -356,14 +381,191 @@ void writeSamples(const Dataset& data, const std::string& prefix) {
     std::printf("wrote %s_{patches,classes,info}.npy: %d eyes\n", prefix.c_str(), patches.rows());
 }
 
+
+/// The corner cascade's eyes: the frame, where the next patch is cut (first
+/// the landmarks' corners or jittered ones, then each stage's result) and the
+/// true corners.
+struct CornerSample {
+    int image = 0;  ///< into CornerSet::grays
+    Point2 outer, inner, true_outer, true_inner;
+    bool mirror = false;
+    float iod = 0.f;  ///< the face's inter-ocular distance, frame pixels
+    bool jittered = false;  ///< cut about the true corners, not at the landmarks'
+};
+
+struct CornerSet {
+    std::vector<cv::Mat> grays;
+    std::vector<CornerSample> samples;
+
+    /// An eye cut at (outer, inner), kept when its true corners lie within 8 patch pixels
+    /// of the canonical ones (else the landmarks are on another face, or on none).
+    void add(Point2 outer, Point2 inner, Point2 trueOuter, Point2 trueInner, bool mirror, float iod, bool jittered = false) {
+        EyePatch patch;
+        if (!cutEyePatch(grays.back(), outer, inner, mirror, patch)) return;
+        const Point2 o = toPatch(patch, trueOuter), i = toPatch(patch, trueInner);
+        const float t[4] = {o.x - kOuterX, o.y - kCornerY, i.x - kInnerX, i.y - kCornerY};
+        if (std::any_of(t, t + 4, [](float v) { return !(std::fabs(v) < 8.f); })) return;
+        samples.push_back({static_cast<int>(grays.size()) - 1, outer, inner, trueOuter, trueInner, mirror, iod, jittered});
+    }
+    /// The eye and its copies jittered about the true corners: the whole eye shifted (sd 6 %
+    /// of the eye width) and each corner on its own (sd 4 %), as landmarks err on new faces.
+    void addJittered(Point2 trueOuter, Point2 trueInner, bool mirror, float iod, std::mt19937& jitter, int copies) {
+        const float w = std::hypot(trueInner.x - trueOuter.x, trueInner.y - trueOuter.y);
+        std::normal_distribution<float> shift(0.f, 0.06f * w), own(0.f, 0.04f * w);
+        for (int c = 0; c < copies; ++c) {
+            const float sx = shift(jitter), sy = shift(jitter);
+            add({trueOuter.x + sx + own(jitter), trueOuter.y + sy + own(jitter)},
+                {trueInner.x + sx + own(jitter), trueInner.y + sy + own(jitter)}, trueOuter, trueInner, mirror, iod, true);
+        }
+    }
+};
+
+/// 300-W faces of `split` (the 300-W annotators' 68 points): each eye cut where
+/// facetrack's landmarks put its corners and, with `jitter`, `copies` times about the annotation.
+void addCorners300W(CornerSet& set, tools::Split split, std::mt19937* jitter, int copies) {
+    const std::string root = tools::faces300wRoot("");
+    Tracker tracker(landmarkModels(), unfiltered());
+    FrameResult result;
+    for (const auto& image : tools::list300W(root, split)) {
+        const cv::Mat bgr = cv::imread(image.image, cv::IMREAD_COLOR);
+        if (bgr.empty()) continue;
+        const core::Shape2 truth = core::readPts(image.pts);
+        const Eigen::Vector2f centroid = truth.rowwise().mean();
+        tracker.reset();
+        tracker.process(tools::viewOf(bgr), 0.0, result);
+        const auto face = std::find_if(result.faces.begin(), result.faces.end(), [&](const FaceResult& f) {
+            return f.landmarks && core::contains(f.box, centroid.x(), centroid.y());
+        });
+        if (face == result.faces.end()) continue;
+        set.grays.emplace_back();
+        cv::cvtColor(bgr, set.grays.back(), cv::COLOR_BGR2GRAY);
+        const auto point = [&](int k) { return Point2{truth(0, k), truth(1, k)}; };
+        const float iod = std::hypot(truth(0, 45) - truth(0, 36), truth(1, 45) - truth(1, 36));
+        for (const Eye eye : {Eye::Left, Eye::Right}) {
+            const int o = outerCorner(eye), i = innerCorner(eye);
+            const Landmarks68& l = *face->landmarks;
+            set.add(l[static_cast<std::size_t>(o)], l[static_cast<std::size_t>(i)], point(o), point(i), eye == Eye::Left, iod);
+            if (jitter) set.addJittered(point(o), point(i), eye == Eye::Left, iod, *jitter, copies);
+        }
+    }
+}
+
+/// Renders (randomTrainingFace, seeds of their own, not eval-gaze's): the true
+/// corners are the face model's corner vertices, projected.
+void addCornersSynthetic(CornerSet& set, int renders, unsigned seed, std::mt19937& jitter, int copies) {
+    trackTrainingRenders(renders, seed, [&](const tools::SyntheticRenderer& renderer, const tools::SyntheticFace& f, const cv::Mat& image,
+                                            const tools::ClassMap&, const Landmarks68& l) {
+        set.grays.emplace_back();
+        cv::cvtColor(image, set.grays.back(), cv::COLOR_BGR2GRAY);
+        const Landmarks68 truth = renderer.landmarks(f);
+        const float iod = renderer.interocularPx(f);
+        for (const Eye eye : {Eye::Left, Eye::Right}) {
+            const auto o = static_cast<std::size_t>(outerCorner(eye)), i = static_cast<std::size_t>(innerCorner(eye));
+            set.add(l[o], l[i], truth[o], truth[i], eye == Eye::Left, iod);
+            set.addJittered(truth[o], truth[i], eye == Eye::Left, iod, jitter, copies);
+        }
+    });
+}
+
+/// Patches cut where each sample's corners are now, and the targets: the true
+/// corners' offsets from the canonical ones, in patch pixels (4 per patch).
+void cutCornerPatches(const CornerSet& set, std::vector<cv::Mat>& patches, std::vector<float>& targets) {
+    patches.clear();
+    targets.clear();
+    EyePatch patch;
+    for (const CornerSample& s : set.samples) {
+        // A later stage's corners can, rarely, collapse: such an eye gets its canonical patch's error as target.
+        if (!cutEyePatch(set.grays[static_cast<std::size_t>(s.image)], s.outer, s.inner, s.mirror, patch))
+            cutEyePatch(set.grays[static_cast<std::size_t>(s.image)], s.true_outer, s.true_inner, s.mirror, patch);
+        const Point2 o = toPatch(patch, s.true_outer), i = toPatch(patch, s.true_inner);
+        patches.push_back(patch.pixels.clone());
+        targets.insert(targets.end(), {o.x - kOuterX, o.y - kCornerY, i.x - kInnerX, i.y - kCornerY});
+    }
+}
+
+/// Moves every sample's corners by one stage, as the gaze stage does (refineCorners).
+void applyCornerStage(const PatchForest& forest, CornerSet& set) {
+    EyePatch patch;
+    for (CornerSample& s : set.samples) {
+        if (!cutEyePatch(set.grays[static_cast<std::size_t>(s.image)], s.outer, s.inner, s.mirror, patch)) continue;
+        const auto corners = refineCorners(forest, patch);
+        s.outer = corners[0], s.inner = corners[1];
+    }
+}
+
+/// The corners' error as eval-gaze reports it, in % of the inter-ocular
+/// distance: the midpoint along the eye (it places the eyeball sideways) and
+/// each corner's distance from the truth, mean over the set's eyes.
+std::pair<double, double> cornerError(const CornerSet& set) {
+    double along = 0, each = 0;
+    for (const CornerSample& s : set.samples) {
+        const float ax = s.true_inner.x - s.true_outer.x, ay = s.true_inner.y - s.true_outer.y;
+        const float mx = 0.5f * (s.outer.x + s.inner.x - s.true_outer.x - s.true_inner.x);
+        const float my = 0.5f * (s.outer.y + s.inner.y - s.true_outer.y - s.true_inner.y);
+        along += std::fabs(mx * ax + my * ay) / std::hypot(ax, ay) / s.iod;
+        each += 0.5 * (std::hypot(s.outer.x - s.true_outer.x, s.outer.y - s.true_outer.y) +
+                       std::hypot(s.inner.x - s.true_inner.x, s.inner.y - s.true_inner.y)) / s.iod;
+    }
+    const double n = static_cast<double>(std::max<std::size_t>(1, set.samples.size()));
+    return {100.0 * along / n, 100.0 * each / n};
+}
+
+/// The corner cascade: `stages` forests, each trained on patches re-cut where
+/// the previous stages put the training eyes' corners (cascaded regression).
+/// Reports each stage's error on `validation` and `keptBack` (their corners
+/// start where facetrack's landmarks put them).
+std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::pair<const char*, CornerSet*>> reports,
+                                            const tools::Args& args, unsigned seed) {
+    const int stages = static_cast<int>(args.number("--corner-stages", 4));
+    if (stages < 1 || static_cast<std::size_t>(stages) > kMaxCornerStages)
+        throw Error("--corner-stages must be 1.." + std::to_string(kMaxCornerStages));
+    const auto report = [&](const char* when) {
+        for (const auto& [name, set] : reports) {
+            const auto [along, each] = cornerError(*set);
+            std::printf("  %s, %s (%zu eyes): corner midpoint along the eye %.2f %%, corner distance %.2f %% of the inter-ocular distance\n",
+                        name, when, set->samples.size(), along, each);
+        }
+        std::fflush(stdout);
+    };
+    report("landmarks' corners");
+    std::vector<PatchForest> cascade;
+    std::vector<cv::Mat> patches;
+    std::vector<float> targets;
+    for (int k = 0; k < stages; ++k) {
+        cutCornerPatches(train, patches, targets);
+        std::vector<PatchSample> samples;
+        for (std::size_t p = 0; p < patches.size(); ++p) samples.push_back({static_cast<int>(p), 0, 0});
+        ForestTrainingOptions o;
+        o.trees = static_cast<int>(args.number("--corner-trees", 48));
+        o.depth = static_cast<int>(args.number("--corner-depth", 9));
+        o.min_leaf = 4;
+        o.samples_per_tree = static_cast<int>(samples.size());
+        o.search_samples = 6000;
+        o.seed = seed + 2 + static_cast<unsigned>(k);
+        o.draw = drawPatchTest;
+        const auto start = std::chrono::steady_clock::now();
+        o.progress = [&](int done, int total) {
+            if (done % 8 != 0 && done != total) return;
+            std::printf("corner stage %d: tree %d / %d (%.0f s)\n", k + 1, done, total,
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+            std::fflush(stdout);
+        };
+        cascade.push_back(trainPatchForest(patches, samples, targets, 4, o));
+        applyCornerStage(cascade.back(), train);
+        for (const auto& r : reports) applyCornerStage(cascade.back(), *r.second);
+        report(("after stage " + std::to_string(k + 1)).c_str());
+    }
+    return cascade;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     try {
         const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                                {"--out", "--holdout", "--pixel-trees", "--pixel-depth", "--aperture-trees", "--aperture-depth", "--seed",
-                                "--synthetic", "--samples-out", "--iris-net", "--from"},
-                               {"--help", "--synthetic-pixels"});
+                                "--synthetic", "--samples-out", "--iris-net", "--from", "--corner-trees", "--corner-depth", "--corner-synthetic", "--corner-stages"},
+                               {"--help", "--synthetic-pixels", "--corners"});
         if (args.has("--help")) {
             std::puts(kUsage);
             return 0;
@@ -375,18 +577,55 @@ int main(int argc, char** argv) {
             const std::string path = args.get("--iris-net", "");
             return core::readFileBytes(path, "the iris net '" + path + "'");
         };
+        const unsigned seed = static_cast<unsigned>(args.number("--seed", 1));
+        // The corner cascade: 300-W train (eight jittered copies per eye) and renders (four);
+        // reported on 300-W validation and on every tenth render, kept back.
+        const auto cornerCascade = [&](std::ostringstream& provenance) {
+            std::mt19937 cornerJitter(seed);  // its own: the same cascade with --from as in a whole training
+            CornerSet train, validation, renders;
+            addCorners300W(train, tools::Split::Train, &cornerJitter, 8);
+            addCorners300W(validation, tools::Split::Validation, nullptr, 0);
+            const int synthetic = static_cast<int>(args.number("--corner-synthetic", 6000));
+            addCornersSynthetic(renders, synthetic, seed + 2000, cornerJitter, 4);
+            CornerSet keptBack;  // every tenth render, its eyes cut at the landmarks only
+            std::vector<int> moved(renders.grays.size());
+            for (std::size_t g = 0; g < renders.grays.size(); ++g) {
+                CornerSet& to = g % 10 == 9 ? keptBack : train;
+                to.grays.push_back(renders.grays[g]);
+                moved[g] = static_cast<int>(to.grays.size()) - 1;
+            }
+            for (CornerSample s : renders.samples) {
+                const bool back = s.image % 10 == 9;
+                if (back && s.jittered) continue;
+                s.image = moved[static_cast<std::size_t>(s.image)];
+                (back ? keptBack : train).samples.push_back(s);
+            }
+            std::printf("corner cascade: %zu training eyes (%zu images), %zu validation eyes, %zu kept-back render eyes\n",
+                        train.samples.size(), train.grays.size(), validation.samples.size(), keptBack.samples.size());
+            std::vector<PatchForest> cascade =
+                trainCornerCascade(train, {{"300-W validation", &validation}, {"kept-back renders", &keptBack}}, args, seed);
+            provenance << "; " << cascade.size() << " corner stages of " << cascade[0].treeCount() << " trees of depth " << cascade[0].depth
+                       << " on the 300-W annotators' eye corners (train split, patches jittered about them) and " << synthetic
+                       << " renders' exact corners";
+            return cascade;
+        };
         if (args.has("--from")) {
-            if (!args.has("--iris-net")) throw Error("--from needs --iris-net");
+            if (!args.has("--iris-net") && !args.has("--corners")) throw Error("--from needs --iris-net or --corners");
             EyeModelData model = readEyeModel(args.get("--from", ""));
-            model.iris_net = irisNet();
-            model.provenance += "; iris CNN " + std::filesystem::path(args.get("--iris-net", "")).filename().string() +
-                                " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
+            std::ostringstream provenance;
+            provenance << model.provenance;
+            if (args.has("--iris-net")) {
+                model.iris_net = irisNet();
+                provenance << "; iris CNN " << std::filesystem::path(args.get("--iris-net", "")).filename().string()
+                           << " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
+            }
+            if (args.has("--corners")) model.corner_stages = cornerCascade(provenance);
+            model.provenance = provenance.str();
             writeEyeModel(out, model);
             std::printf("wrote %s (%.1f kB): %s\n", out.c_str(), std::filesystem::file_size(out) / 1024.0, model.provenance.c_str());
             return 0;
         }
         const auto holdout = tools::splitList(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
-        const unsigned seed = static_cast<unsigned>(args.number("--seed", 1));
         const auto start = std::chrono::steady_clock::now();
         const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
 
@@ -493,6 +732,7 @@ int main(int argc, char** argv) {
         for (const auto& c : trainClips) provenance << " " << c;
         provenance << "; " << synthetic << " synthetic renders (" << (args.has("--synthetic-pixels") ? "both forests" : "aperture forest")
                    << "); patches cut with facetrack's own landmarks";
+        model.corner_stages = cornerCascade(provenance);
         if (args.has("--iris-net")) {
             model.iris_net = irisNet();
             provenance << "; iris CNN " << std::filesystem::path(args.get("--iris-net", "")).filename().string()

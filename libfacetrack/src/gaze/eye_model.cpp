@@ -36,6 +36,11 @@ void validate(const EyeModelData& m, const std::string& what) {
     if (m.pixels.outputs != kPixelClasses || m.aperture.outputs != 1) throw Error(what + ": corrupt: forest outputs");
     if (!(m.open_aperture > 0.f && m.open_aperture < 2.f && m.closed_aperture >= 0.f && m.closed_aperture < m.open_aperture))
         throw Error(what + ": corrupt: open or closed aperture");
+    if (m.corner_stages.size() > kMaxCornerStages) throw Error(what + ": corrupt: corner stages");
+    for (const PatchForest& f : m.corner_stages) {
+        f.validate(what.c_str());
+        if (f.outputs != 4) throw Error(what + ": corrupt: corner forest outputs");
+    }
     if (!m.iris_net.empty()) IrisNet(m.iris_net, what + ": its iris net");  // loads and runs once, or throws
 }
 }  // namespace
@@ -49,6 +54,8 @@ void writeEyeModel(const std::string& path, const EyeModelData& m) {
     w.put(m.closed_aperture);
     w.putString(m.provenance);
     w.putString(m.iris_net);
+    w.put<std::uint8_t>(static_cast<std::uint8_t>(m.corner_stages.size()));
+    for (const PatchForest& f : m.corner_stages) putForest(w, f);
     core::writeModelFile(path, kEyeModelMagic, kEyeModelVersion, w.bytes());
 }
 
@@ -64,9 +71,33 @@ EyeModelData readEyeModel(const std::string& path) {
     m.closed_aperture = r.get<float>();
     m.provenance = r.getString();
     if (version >= 2) m.iris_net = r.getString();
+    if (version >= 3) {
+        const std::size_t stages = r.get<std::uint8_t>();
+        if (stages > kMaxCornerStages) r.fail("the number of corner stages");
+        for (std::size_t k = 0; k < stages; ++k) m.corner_stages.push_back(getForest(r));
+    }
     r.expectEnd();
     validate(m, what);
     return m;
+}
+
+std::array<Point2, 2> refineCorners(const PatchForest& forest, const EyePatch& patch) {
+    float d[4];
+    forest.evaluate(patch.pixels, 0, 0, d);
+    return {toImage(patch, {kOuterX + d[0], kCornerY + d[1]}), toImage(patch, {kInnerX + d[2], kCornerY + d[3]})};
+}
+
+std::array<Point2, 2> eyeCorners(const EyeModelData& model, const cv::Mat& gray, const EyePatch& patch, EyePatch& scratch) {
+    std::array<Point2, 2> corners = {toImage(patch, {kOuterX, kCornerY}), toImage(patch, {kInnerX, kCornerY})};
+    for (std::size_t k = 0; k < model.corner_stages.size(); ++k) {
+        const EyePatch* at = &patch;
+        if (k > 0) {
+            if (!cutEyePatch(gray, corners[0], corners[1], patch.mirrored, scratch)) break;
+            at = &scratch;
+        }
+        corners = refineCorners(model.corner_stages[k], *at);
+    }
+    return corners;
 }
 
 void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& iris, cv::Mat& open) {

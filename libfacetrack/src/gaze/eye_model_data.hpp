@@ -4,8 +4,10 @@
 #include "gaze/eye_patch.hpp"
 #include "gaze/patch_forest.hpp"
 
+#include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace facetrack::gaze {
 
@@ -45,15 +47,36 @@ struct EyeModelData {
     /// probabilities (skin, sclera, iris) on the grid above
     /// (tools/train_eyes/train_iris_net.py). Empty: the pixel forest classifies.
     std::string iris_net;
+    /// Optional (file version 3): the eye corners refined from the patch, a
+    /// cascade of forests. Anchor: the patch origin; outputs: the outer and
+    /// the inner corner's offsets (x, y) from (kOuterX, kCornerY) and
+    /// (kInnerX, kCornerY) in patch pixels; each stage reads a patch re-cut at
+    /// the previous one's corners. Trained on the 300-W annotators' corners
+    /// and renders' exact ones (train_eyes). Empty: the landmarks' corners.
+    std::vector<PatchForest> corner_stages;
 };
+
+/// One stage of the corner cascade: the corners `patch` was cut at, moved by
+/// `forest`'s reading of it (outer, inner; frame pixels).
+std::array<Point2, 2> refineCorners(const PatchForest& forest, const EyePatch& patch);
+
+/// An eye's outer and inner corners in the frame: those `patch` was cut at
+/// (the landmarks'), refined by each of the model's corner stages, re-cutting
+/// into `scratch` between stages. Why: the eyeballs are placed from the
+/// corners, and 1 % of the inter-ocular distance there is about 2 degrees of
+/// gaze (docs/gaze.md).
+std::array<Point2, 2> eyeCorners(const EyeModelData& model, const cv::Mat& gray, const EyePatch& patch, EyePatch& scratch);
 
 /// P(iris) and P(open) = P(sclera) + P(iris) of one normalised patch on
 /// kClassifiedRegion's cells, by the pixel forest, into `iris` and `open`
 /// (CV_32F, rows() x columns(), allocated by the caller).
 void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& iris, cv::Mat& open);
 
+/// At most this many corner stages (a file with more is corrupt).
+constexpr std::size_t kMaxCornerStages = 4;
+
 constexpr char kEyeModelMagic[] = "FTEYES01";
-constexpr std::uint32_t kEyeModelVersion = 2;  ///< 1: no iris net
+constexpr std::uint32_t kEyeModelVersion = 3;  ///< 1: no iris net; 2: no corner forest
 
 void writeEyeModel(const std::string& path, const EyeModelData& model);
 /// Throws Error naming the file when it is missing, truncated or corrupt.

@@ -76,6 +76,7 @@ struct GazeFaceState final : pipeline::StageState {
     std::array<Eigen::Vector3f, 2> offset{Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};  // landmark correction, model frame
     bool have_offset = false;
     std::vector<Vec3> mesh;
+    EyePatch recut;  // the corner cascade's later stages' patches
 };
 
 /// Indices of the face model's eye shapes (-1 when it has no such shape).
@@ -174,10 +175,17 @@ public:
         const EyeModelData& model = eyes_->data();
         std::array<EyeObservation, 2> seen;
         std::array<float, 2> ratio{}, openness{};
-        placeEyeballs(*r.landmarks, R, t, frame.camera, s);
         std::array<bool, 2> cut{};
-        for (int e = 0; e < 2; ++e)
-            cut[e] = cutEyePatch(frame.gray, *r.landmarks, e == 0 ? Eye::Left : Eye::Right, s.eyes[static_cast<std::size_t>(e)].patch);
+        std::array<std::array<Point2, 2>, 2> corners;  // per eye: outer, inner
+        for (int e = 0; e < 2; ++e) {
+            const Eye eye = e == 0 ? Eye::Left : Eye::Right;
+            EyePatch& patch = s.eyes[static_cast<std::size_t>(e)].patch;
+            cut[e] = cutEyePatch(frame.gray, *r.landmarks, eye, patch);
+            corners[e] = cut[e] ? eyeCorners(model, frame.gray, patch, s.recut)
+                                : std::array<Point2, 2>{(*r.landmarks)[static_cast<std::size_t>(outerCorner(eye))],
+                                                        (*r.landmarks)[static_cast<std::size_t>(innerCorner(eye))]};
+        }
+        placeEyeballs(corners, R, t, frame.camera, s);
         classify(model, cut, s);
         for (int e = 0; e < 2; ++e) {
             const Eigen::Vector3f c = Eigen::Vector3f(s.centres[e].x, s.centres[e].y, s.centres[e].z) + s.offset[e];
@@ -275,21 +283,21 @@ private:
         s.have_centres = true;
     }
 
-    /// Ties each eyeball to the eye corners the landmarks see, not only to the
-    /// fitted mesh: the fit places the mesh as a compromise over all 68
-    /// landmarks, which can leave its eyes a few mm off the image's eyes. The
-    /// observed corners, back-projected at the mesh corners' depths, give where
-    /// the eye is; the difference to the mesh's corners (model frame) is
-    /// averaged over frames (a per-user refinement that does not follow landmark jitter).
-    void placeEyeballs(const Landmarks68& l, const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const fit::Camera& camera,
-                       GazeFaceState& s) const {
+    /// Ties each eyeball to the eye corners seen in the image (`corners`: per
+    /// eye, outer and inner), not only to the fitted mesh: the fit places the
+    /// mesh as a compromise over all 68 landmarks, which can leave its eyes a
+    /// few mm off the image's eyes. The observed corners, back-projected at the
+    /// mesh corners' depths, give where the eye is; the difference to the
+    /// mesh's corners (model frame) is averaged over frames (a per-user
+    /// refinement that does not follow landmark jitter).
+    void placeEyeballs(const std::array<std::array<Point2, 2>, 2>& corners, const Eigen::Matrix3f& R, const Eigen::Vector3f& t,
+                       const fit::Camera& camera, GazeFaceState& s) const {
         for (int e = 0; e < 2; ++e) {
-            const Eye eye = e == 0 ? Eye::Left : Eye::Right;
             Eigen::Vector3f delta = Eigen::Vector3f::Zero();
             for (int k = 0; k < 2; ++k) {
                 const Vec3& v = s.corners[e][static_cast<std::size_t>(k)];
                 const Eigen::Vector3f mesh = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
-                const Point2 p = l[static_cast<std::size_t>(k == 0 ? outerCorner(eye) : innerCorner(eye))];
+                const Point2 p = corners[static_cast<std::size_t>(e)][static_cast<std::size_t>(k)];
                 const Eigen::Vector3f seen(static_cast<float>((p.x - camera.cx) / camera.fx) * mesh.z(),
                                            static_cast<float>((p.y - camera.cy) / camera.fy) * mesh.z(), mesh.z());
                 delta += 0.5f * R.transpose() * (seen - mesh);
