@@ -76,7 +76,7 @@ void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& 
 constexpr std::size_t kMaxCornerStages = 4;
 
 constexpr char kEyeModelMagic[] = "FTEYES01";
-constexpr std::uint32_t kEyeModelVersion = 3;  ///< 1: no iris net; 2: no corner forest
+constexpr std::uint32_t kEyeModelVersion = 3;  ///< 1: no iris net; 2: no corner cascade
 
 void writeEyeModel(const std::string& path, const EyeModelData& model);
 /// Throws Error naming the file when it is missing, truncated or corrupt.
