@@ -367,16 +367,19 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
                 const gaze::Eye eye = e == 0 ? gaze::Eye::Left : gaze::Eye::Right;
                 const auto outer = static_cast<std::size_t>(gaze::outerCorner(eye)), inner = static_cast<std::size_t>(gaze::innerCorner(eye));
                 const Landmarks68& l = *face.landmarks;
-                const double dx = 0.5 * (l[outer].x + l[inner].x - truth[outer].x - truth[inner].x);
-                const double dy = 0.5 * (l[outer].y + l[inner].y - truth[outer].y - truth[inner].y);
-                cornerErrors.push_back(100.0 * std::hypot(dx, dy) / iod);
-                cornerShiftX.push_back(dx / iod);
+                // A corner pair's midpoint minus the render's, in frame pixels.
+                const auto midpointError = [&](Point2 o, Point2 i) {
+                    return Point2{0.5f * (o.x + i.x - truth[outer].x - truth[inner].x), 0.5f * (o.y + i.y - truth[outer].y - truth[inner].y)};
+                };
+                const Point2 d = midpointError(l[outer], l[inner]);
+                cornerErrors.push_back(100.0 * std::hypot(d.x, d.y) / iod);
+                cornerShiftX.push_back(d.x / iod);
+                landmarkErrors[e].push_back(cornerErrors.back());
                 gaze::EyePatch patch, scratch;
                 if (!gaze::cutEyePatch(gray, l, eye, patch)) continue;
                 const auto refined = gaze::eyeCorners(models.eyes->data(), gray, patch, scratch);
-                refinedErrors[e].push_back(100.0 * std::hypot(0.5 * (refined[0].x + refined[1].x - truth[outer].x - truth[inner].x),
-                                                              0.5 * (refined[0].y + refined[1].y - truth[outer].y - truth[inner].y)) / iod);
-                landmarkErrors[e].push_back(cornerErrors.back());
+                const Point2 r = midpointError(refined[0], refined[1]);
+                refinedErrors[e].push_back(100.0 * std::hypot(r.x, r.y) / iod);
             }
         }
     }

@@ -510,10 +510,10 @@ std::pair<double, double> cornerError(const CornerSet& set) {
     return {100.0 * along / n, 100.0 * each / n};
 }
 
-/// The corner cascade: `stages` forests, each trained on patches re-cut where
-/// the previous stages put the training eyes' corners (cascaded regression).
-/// Reports each stage's error on `validation` and `keptBack` (their corners
-/// start where facetrack's landmarks put them).
+/// The corner cascade: --corner-stages forests, each trained on patches re-cut
+/// where the previous stages put the training eyes' corners (cascaded
+/// regression). Moves the corners of the `reports` sets (which start where
+/// facetrack's landmarks put them) stage by stage and prints their error.
 std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::pair<const char*, CornerSet*>> reports,
                                             const tools::Args& args, unsigned seed) {
     const int stages = static_cast<int>(args.number("--corner-stages", 4));
