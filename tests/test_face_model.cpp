@@ -259,5 +259,33 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     std::filesystem::remove(copy);
 }
 
+/// landmarkPoints is the fit basis's landmark slots in the model frame: the
+/// same points whether read off a mesh or off the basis the fit uses.
+TEST(LandmarkConvention, LandmarkPointsAreTheFitsLandmarksOnTheMesh) {
+    const std::string shipped = test::sourceDir() + "/models/landmark_convention.ftm";
+    if (!std::filesystem::exists(shipped)) GTEST_SKIP() << "models/landmark_convention.ftm is missing (build/tools/train_convention makes it)";
+    const auto bare = FaceModel::load(test::shippedFaceModel());
+    const auto with = FaceModel::load(test::shippedFaceModel(), shipped);
+    const std::vector<Vec3> mesh = with->vertices({}, {});
+    const std::vector<int> vertices = with->landmarkVertices();
+    const std::vector<Vec3> plain = bare->landmarkPoints(mesh), moved = with->landmarkPoints(mesh);
+    ASSERT_EQ(moved.size(), 68u);
+    const fit::FitBasis& basis = *with->fitBasis();
+    double largest = 0.0;
+    for (std::size_t i = 0; i < 68; ++i) {
+        const Vec3& v = mesh[static_cast<std::size_t>(vertices[i])];
+        EXPECT_EQ(plain[i].x, v.x);
+        EXPECT_EQ(plain[i].z, v.z);
+        // The basis is in cm, turned by R_0 = diag(1, -1, -1).
+        const Eigen::Vector3d slot = basis.neutral.col(basis.landmark_slots[i]);
+        EXPECT_NEAR(moved[i].x, 10.0 * slot.x(), 1e-3) << i;
+        EXPECT_NEAR(moved[i].y, -10.0 * slot.y(), 1e-3) << i;
+        EXPECT_NEAR(moved[i].z, -10.0 * slot.z(), 1e-3) << i;
+        largest = std::max(largest, static_cast<double>(std::hypot(moved[i].x - v.x, moved[i].y - v.y, moved[i].z - v.z)));
+    }
+    EXPECT_GT(largest, 1.0);  // millimetres: the convention moves some landmarks
+    EXPECT_THROW(with->landmarkPoints(std::vector<Vec3>(10)), Error);
+}
+
 }  // namespace
 }  // namespace facetrack

@@ -167,6 +167,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
         }
     }
     const double median = percentile(apertures, 0.5);
+    std::vector<double> towardsNose, up;
     for (const auto& [t, f] : faces) {
         const Landmarks68& l = *f.landmarks;
         const double corners = std::hypot(l[45].x - l[36].x, l[45].y - l[36].y);
@@ -174,6 +175,12 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
             if (!t->eye(e).in_pts_eye || t->eye(e).aperture() < 0.8 * median) continue;
             const Point2 p = eyeOf(*f.gaze, e).pupil_px, c = t->eye(e).iris_centre;
             errors.push_back(std::hypot(p.x - c.x, p.y - c.y) / corners);
+            // The signed difference in the eye's own frame: towards the nose, and up.
+            // Image y points down; the left eye's corner axis points the other way along x.
+            const Point2 outer = l[static_cast<std::size_t>(gaze::outerCorner(e))], inner = l[static_cast<std::size_t>(gaze::innerCorner(e))];
+            const double ux = inner.x - outer.x, uy = inner.y - outer.y, n = std::hypot(ux, uy);
+            towardsNose.push_back(((p.x - c.x) * ux + (p.y - c.y) * uy) / n / corners);
+            up.push_back(((p.x - c.x) * uy - (p.y - c.y) * ux) / n / corners * (e == gaze::Eye::Left ? -1.0 : 1.0));
         }
     }
     std::printf("300-W %s: pupil error mean %.4f p95 %.4f outer-eye-corner distances (%zu open eyes of %zu faces); "
@@ -181,6 +188,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
                 "(landmarks), %.2f %% (corner cascade)\n",
                 split == tools::Split::Test ? "test" : "validation", mean(errors), percentile(errors, 0.95), errors.size(),
                 faces.size(), mean(cornerErrors), mean(refinedErrors));
+    std::printf("  our pupil minus the teacher's, mean: towards the nose %+.4f, up %+.4f outer-eye-corner distances\n", mean(towardsNose), mean(up));
 }
 
 }  // namespace

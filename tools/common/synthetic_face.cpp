@@ -46,20 +46,30 @@ Vec3 SyntheticRenderer::gazeInCamera(const SyntheticFace& f, int e) const {
     return {d.x(), d.y(), d.z()};
 }
 
-Landmarks68 SyntheticRenderer::landmarks(const SyntheticFace& f) const {
-    const std::vector<Vec3> mesh = model_->vertices({}, f.expression);
+namespace {
+Landmarks68 project(const SyntheticFace& f, const std::vector<Vec3>& points) {
     const Eigen::Matrix3f R = rotationOf(f.rotation);
     Landmarks68 out;
     for (std::size_t i = 0; i < out.size(); ++i) {
-        const Eigen::Vector3f p = R * eig(mesh[static_cast<std::size_t>(landmark_vertices_[i])]) + eig(f.translation_mm);
+        const Eigen::Vector3f p = R * eig(points[i]) + eig(f.translation_mm);
         out[i] = {f.fx * p.x() / p.z() + f.cx, f.fy * p.y() / p.z() + f.cy};
     }
     return out;
 }
+}  // namespace
+
+Landmarks68 SyntheticRenderer::landmarks(const SyntheticFace& f) const {
+    return project(f, model_->landmarkPoints(model_->vertices({}, f.expression)));
+}
 
 Box SyntheticRenderer::faceBox(const SyntheticFace& f) const {
+    // From the landmark vertices, not the convention's points: the box stands for a
+    // detector's, which does not depend on where an annotator puts the brows.
+    const std::vector<Vec3> mesh = model_->vertices({}, f.expression);
+    std::vector<Vec3> vertices;
+    for (const int v : landmark_vertices_) vertices.push_back(mesh[static_cast<std::size_t>(v)]);
     Box b{1e9f, 1e9f, -1e9f, -1e9f};
-    for (const Point2& p : landmarks(f))
+    for (const Point2& p : project(f, vertices))
         b = {std::min(b.x0, p.x), std::min(b.y0, p.y), std::max(b.x1, p.x), std::max(b.y1, p.y)};
     const float pad = 0.1f * b.width();
     return {b.x0 - pad, b.y0 - 2 * pad, b.x1 + pad, b.y1 + pad};

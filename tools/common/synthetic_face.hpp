@@ -45,7 +45,8 @@ public:
     cv::Mat render(const SyntheticFace& face, ClassMap* classes = nullptr) const;
     /// The true gaze direction of eye e (0 left, 1 right) in the camera frame.
     Vec3 gazeInCamera(const SyntheticFace& face, int e) const;
-    /// The 68 landmarks' projections.
+    /// The 68 landmarks' projections, in the model's landmark convention
+    /// (FaceModel::landmarkPoints: where a 300-W annotator would put them).
     Landmarks68 landmarks(const SyntheticFace& face) const;
     /// A face detector's box for the render: the landmarks' bounding box with
     /// 10 % margins, 20 % above (a detector's box includes the forehead).

@@ -34,6 +34,7 @@
 #include <mutex>
 #include <numeric>
 #include <random>
+#include <regex>
 #include <sstream>
 
 using namespace facetrack;
@@ -56,7 +57,7 @@ DIR/{train,validation,heldout}_{patches,classes,info}.npy, then stops.
 --iris-net puts that CNN in the model, in place of the pixel forest. The corner cascade (the eye
 corners refined from the patch, which place the eyeballs; default 4 stages) learns the 300-W
 annotators' corners of the train split and the exact corners of RENDERS other renders (default
-6,000), from patches cut near them; reported on 300-W validation and every tenth render, their
+12,000), from patches cut near them; reported on 300-W validation and every tenth render, their
 patches cut where facetrack's landmarks put the corners. --from MODEL.ftm adds to an existing
 model (its forests kept) instead of training one: the iris net (--iris-net) and/or a new corner
 cascade (--corners).)";
@@ -451,7 +452,9 @@ void addCorners300W(CornerSet& set, tools::Split split, std::mt19937* jitter, in
 }
 
 /// Renders (randomTrainingFace, seeds of their own, not eval-gaze's): the true
-/// corners are the face model's corner vertices, projected.
+/// corners are the face model's corners in the landmark convention
+/// (FaceModel::landmarkPoints), projected, so that the cascade reads corners in
+/// the 300-W annotators' convention on renders as on real faces.
 void addCornersSynthetic(CornerSet& set, int renders, unsigned seed, std::mt19937& jitter, int copies) {
     trackTrainingRenders(renders, seed, [&](const tools::SyntheticRenderer& renderer, const tools::SyntheticFace& f, const cv::Mat& image,
                                             const tools::ClassMap&, const Landmarks68& l) {
@@ -558,6 +561,12 @@ std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::p
     return cascade;
 }
 
+/// `provenance` without its "; N corner stages ..." part.
+std::string withoutCornerStages(const std::string& provenance) {
+    static const std::regex stages(R"(; \d+ corner stages[^;]*)");
+    return std::regex_replace(provenance, stages, "");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -585,7 +594,7 @@ int main(int argc, char** argv) {
             CornerSet train, validation, renders;
             addCorners300W(train, tools::Split::Train, &cornerJitter, 8);
             addCorners300W(validation, tools::Split::Validation, nullptr, 0);
-            const int synthetic = static_cast<int>(args.number("--corner-synthetic", 6000));
+            const int synthetic = static_cast<int>(args.number("--corner-synthetic", 12000));
             addCornersSynthetic(renders, synthetic, seed + 2000, cornerJitter, 4);
             CornerSet keptBack;  // every tenth render, its eyes cut at the landmarks only
             std::vector<int> moved(renders.grays.size());
@@ -613,7 +622,8 @@ int main(int argc, char** argv) {
             if (!args.has("--iris-net") && !args.has("--corners")) throw Error("--from needs --iris-net or --corners");
             EyeModelData model = readEyeModel(args.get("--from", ""));
             std::ostringstream provenance;
-            provenance << model.provenance;
+            // A new cascade replaces the old one, and its line in the provenance.
+            provenance << (args.has("--corners") ? withoutCornerStages(model.provenance) : model.provenance);
             if (args.has("--iris-net")) {
                 model.iris_net = irisNet();
                 provenance << "; iris CNN " << std::filesystem::path(args.get("--iris-net", "")).filename().string()

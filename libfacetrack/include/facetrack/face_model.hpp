@@ -73,6 +73,11 @@ public:
     const std::vector<std::string>& expressionNames() const;
     /// Vertex index of each of the 68 iBUG landmarks.
     std::vector<int> landmarkVertices() const;
+    /// The 68 landmarks on `mesh` (from vertices(); model frame, mm): each
+    /// landmark vertex moved by the landmark convention's offset, i.e. where a
+    /// 300-W annotator puts that landmark on this face; without a convention,
+    /// the landmark vertices themselves. Throws Error when `mesh` has the wrong size.
+    std::vector<Vec3> landmarkPoints(const std::vector<Vec3>& mesh) const;
     const std::string& sourcePath() const;
 
     /// ARKit-52 weights (arkitNames() order) from native expression weights
@@ -112,6 +117,7 @@ private:
     std::string convention_;
     std::vector<std::string> expression_names_;
     std::shared_ptr<const model::ArkitMapping> arkit_;
+    std::vector<Vec3> landmark_offsets_mm_;  // the convention's, model frame; zero without one
 };
 
 }  // namespace facetrack

@@ -363,7 +363,7 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
         const float limit = 10.f * kDeg;
         const Eigen::Vector4f taken = largest > limit ? Eigen::Vector4f(step * (limit / largest)) : step;
         for (int k = 0; k < 4; ++k) a[k / 2][k % 2] += taken[k];
-        if (largest < 0.02f * kDeg) break;
+        if (largest < s.converged_step_deg * kDeg) break;
     }
     for (auto& e : a) {
         e.x() = std::clamp(e.x(), -60.f * kDeg, 60.f * kDeg);

@@ -72,7 +72,11 @@ struct GazeFitSettings {
     float vergence_deg = 3.f;          ///< theta_R - theta_L for a typical screen distance
     float vergence_sigma_deg = 4.f;
     float ahead_sigma_deg = 40.f;
-    int iterations = 4;
+    /// Gauss-Newton steps at most; the fit stops earlier once no angle moves by
+    /// converged_step_deg. Four steps left a single frame's fit short of its
+    /// minimum on eyes looking far up (docs/gaze.md).
+    int iterations = 8;
+    float converged_step_deg = 0.1f;
 };
 
 /// Both eyes' (yaw, pitch) in radians, [0] the subject's left eye, [1] the right.

@@ -72,7 +72,7 @@ struct GazeFaceState final : pipeline::StageState {
     std::vector<float> centres_identity;  // the identity the eyeball centres were computed for
     bool have_centres = false;
     std::array<Vec3, 2> centres;          // eyeball rotation centres on the identity's mesh (model frame)
-    std::array<std::array<Vec3, 2>, 2> corners;  // that mesh's outer and inner eye-corner vertices
+    std::array<std::array<Vec3, 2>, 2> corners;  // that mesh's outer and inner eye corners (FaceModel::landmarkPoints)
     std::array<Eigen::Vector3f, 2> offset{Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};  // landmark correction, model frame
     bool have_offset = false;
     std::vector<Vec3> mesh;
@@ -128,8 +128,7 @@ public:
         : eyes_(std::move(eyes)),
           face_(std::move(face)),
           rigs_(EyeRig::both(*face_)),
-          shapes_(eyeShapes(*face_)),
-          landmark_vertices_(face_->landmarkVertices()) {
+          shapes_(eyeShapes(*face_)) {
         if (!eyes_->data().iris_net.empty()) iris_net_.emplace(eyes_->data().iris_net, "eye model '" + eyes_->sourcePath() + "': its iris net");
     }
 
@@ -272,12 +271,14 @@ private:
     void updateCentres(const FaceResult& r, GazeFaceState& s) const {
         if (s.have_centres && s.centres_identity == r.identity) return;
         face_->vertices(r.identity, {}, s.mesh);
+        // The corners in the landmarks' convention: the observed corners (the cascade's, the
+        // landmarks') are 300-W-style, about 1 mm above the model's corner vertices.
+        const std::vector<Vec3> points = face_->landmarkPoints(s.mesh);
         for (int e = 0; e < 2; ++e) {
             const Eigen::Vector3f c = rotationCentre(e == 0 ? face_->leftEyeball() : face_->rightEyeball(), rigs_[e].centre(s.mesh));
             s.centres[e] = {c.x(), c.y(), c.z()};
             const Eye eye = e == 0 ? Eye::Left : Eye::Right;
-            s.corners[e] = {s.mesh[static_cast<std::size_t>(landmark_vertices_[static_cast<std::size_t>(outerCorner(eye))])],
-                            s.mesh[static_cast<std::size_t>(landmark_vertices_[static_cast<std::size_t>(innerCorner(eye))])]};
+            s.corners[e] = {points[static_cast<std::size_t>(outerCorner(eye))], points[static_cast<std::size_t>(innerCorner(eye))]};
         }
         s.centres_identity = r.identity;
         s.have_centres = true;
@@ -333,7 +334,6 @@ private:
     std::shared_ptr<const FaceModel> face_;
     std::array<EyeRig, 2> rigs_;
     std::array<EyeShapes, 2> shapes_;
-    std::vector<int> landmark_vertices_;
     std::optional<IrisNet> iris_net_;
 };
 

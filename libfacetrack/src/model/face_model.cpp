@@ -17,7 +17,17 @@ FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::stri
     for (const auto& e : data_->expressions) expression_names_.push_back(e.name);
     arkit_ = std::make_shared<const model::ArkitMapping>(model::makeArkitMapping(expression_names_));
     fit::FitBasis basis = fit::buildFitBasis(*data_);
-    if (!convention_.empty()) fit::applyConvention(basis, fit::readLandmarkConvention(convention_), *data_);
+    landmark_offsets_mm_.assign(model::kLandmarkCount, Vec3{0.f, 0.f, 0.f});
+    if (!convention_.empty()) {
+        const fit::LandmarkConvention convention = fit::readLandmarkConvention(convention_);
+        fit::applyConvention(basis, convention, *data_);
+        // Frontal frame (cm) to model frame (mm): R_0 = diag(1, -1, -1) (fit_basis.hpp).
+        for (int i = 0; i < model::kLandmarkCount; ++i) {
+            const auto o = convention.offsets_frontal_cm.col(i);
+            landmark_offsets_mm_[static_cast<std::size_t>(i)] = {static_cast<float>(10.0 * o.x()), static_cast<float>(-10.0 * o.y()),
+                                                                 static_cast<float>(-10.0 * o.z())};
+        }
+    }
     fit_basis_ = std::make_shared<const fit::FitBasis>(std::move(basis));
 }
 
@@ -59,6 +69,19 @@ std::array<float, kArkitBlendshapeCount> FaceModel::toArkit(const std::vector<fl
 
 std::vector<int> FaceModel::landmarkVertices() const {
     return std::vector<int>(data_->landmark_vertices.begin(), data_->landmark_vertices.end());
+}
+
+std::vector<Vec3> FaceModel::landmarkPoints(const std::vector<Vec3>& mesh) const {
+    if (static_cast<int>(mesh.size()) != vertexCount())
+        throw Error("FaceModel::landmarkPoints: a mesh of " + std::to_string(mesh.size()) + " vertices given, the model has " +
+                    std::to_string(vertexCount()));
+    std::vector<Vec3> out(model::kLandmarkCount);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const Vec3& v = mesh[data_->landmark_vertices[i]];
+        const Vec3& o = landmark_offsets_mm_[i];
+        out[i] = {v.x + o.x, v.y + o.y, v.z + o.z};
+    }
+    return out;
 }
 
 std::vector<Vec3> FaceModel::vertices(const std::vector<float>& identity, const std::vector<float>& expression) const {
