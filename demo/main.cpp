@@ -110,7 +110,7 @@ int run(int argc, char** argv) {
     }
     if (!args.positional().empty()) throw Error("unexpected argument '" + args.positional()[0] + "' (an input goes after --input)");
     const bool headless = args.has("--headless");
-    const int maxFrames = static_cast<int>(args.number("--frames", headless ? 100 : -1));
+    const int maxFrames = args.integer("--frames", headless ? 100 : -1);
     const std::string screenshot = args.get("--screenshot");
 
     const bool fromCamera = !args.has("--input");
@@ -130,7 +130,7 @@ int run(int argc, char** argv) {
     cv::Mat shown = frame.bgr.clone();
 
     const cv::Size panel = DemoView::panelSizeFor(shown.size());
-    GlContext gl(2 * panel.width, panel.height, "facetrack demo", !headless, static_cast<int>(args.number("--msaa", -1)));
+    GlContext gl(2 * panel.width, panel.height, "facetrack demo", !headless, args.integer("--msaa", -1));
     std::cerr << "facetrack_demo: rendering with " << gl.rendererName() << ", " << gl.samples() << "x multisampling\n";
     DemoView view(tracker.models().face, panel.width, panel.height);
     Controls keys;

@@ -62,6 +62,21 @@ TEST(BinaryIo, ReadingPastTheEndThrowsWithContext) {
     EXPECT_NE(msg.find("truncated"), std::string::npos) << msg;
 }
 
+/// Found by fuzz_model_files (fuzz/corpus/fuzz_model_files/regression-empty-vector):
+/// an empty vector handed memcpy its null data() (undefined behaviour, UBSan).
+TEST(BinaryIo, EmptyVectorsAndArraysRoundTrip) {
+    BinaryWriter w;
+    w.putVector(std::vector<float>{});
+    w.putVector(std::vector<std::uint8_t>{});
+    w.putString("");
+    BinaryReader r(w.bytes(), "test");
+    EXPECT_TRUE(r.getVector<float>().empty());
+    EXPECT_TRUE(r.getVector<std::uint8_t>().empty());
+    EXPECT_EQ(r.getString(), "");
+    r.getArray<float>(nullptr, 0);
+    EXPECT_NO_THROW(r.expectEnd());
+}
+
 TEST(BinaryIo, TrailingBytesAreAnError) {
     BinaryWriter w;
     w.put<std::uint32_t>(1);

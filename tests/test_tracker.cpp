@@ -1,9 +1,11 @@
 #include "core/image.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/tracker.hpp"
+#include "common/finite_result.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <opencv2/core.hpp>
@@ -11,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <thread>
 
 namespace facetrack {
@@ -237,6 +240,64 @@ TEST(Tracker, FourThreadsGiveWhatOneGivesAlone) {
     }
     ASSERT_GT(alone.size(), frames.size() * 100) << "the pipeline gave too little to compare";
     for (const Trace& t : threaded) EXPECT_EQ(t, alone);
+}
+
+// docs/robustness.md's bad frames, one tracker through all of them in a row:
+// each gives finite results or a clear Error, never a crash or NaN, and the
+// face is found again after each.
+TEST(Tracker, AnyFrameGivesFiniteResultsOrAClearError) {
+    FACETRACK_REQUIRE_PIPELINE();
+    const auto faces = clipFrames(12);
+    ASSERT_EQ(faces.size(), 12u);
+    Tracker tracker(Models::loadDefault());
+    int frame = 0;
+    const auto run = [&](const cv::Mat& image, double time) {
+        const FrameResult r = tracker.process(core::viewOf(image), time);
+        for (const FaceResult& f : r.faces) EXPECT_EQ(tools::firstNonFinite(f), "") << "frame " << frame;
+        ++frame;
+        return r;
+    };
+    const auto face = [&](double time) { return run(faces[static_cast<std::size_t>(frame) % faces.size()], time); };
+    EXPECT_EQ(face(0.0).faces.size(), 1u);
+    // Time stamps repeated, going backwards, NaN, then on again.
+    EXPECT_EQ(face(0.0).faces.size(), 1u);
+    EXPECT_EQ(face(-5.0).faces.size(), 1u);
+    EXPECT_EQ(face(std::numeric_limits<double>::quiet_NaN()).faces.size(), 1u);
+    EXPECT_EQ(face(std::numeric_limits<double>::infinity()).faces.size(), 1u);
+    EXPECT_EQ(face(1.0).faces.size(), 1u);
+    // Content with no face: black, white, noise; then the face again.
+    cv::Mat noise(480, 640, CV_8UC3);
+    cv::randu(noise, 0, 256);
+    for (const cv::Mat& blank : {cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0)), cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(255)), noise})
+        EXPECT_TRUE(run(blank, 1.1).faces.empty());
+    EXPECT_EQ(face(1.2).faces.size(), 1u);
+    // The frame's size changes mid-stream: 1 x 1, 7 x 5, a grey 8K frame, half the size, then the face.
+    for (const cv::Size size : {cv::Size(1, 1), cv::Size(7, 5)}) EXPECT_TRUE(run(cv::Mat(size, CV_8UC3, cv::Scalar::all(90)), 1.3).faces.empty());
+    {
+        cv::Mat big(4320, 7680, CV_8UC1, cv::Scalar::all(128));
+        EXPECT_TRUE(tracker.process(ImageView{big.data, big.cols, big.rows, big.step[0], PixelFormat::Gray8}, 1.4).faces.empty());
+    }
+    cv::Mat half;
+    cv::resize(faces[0], half, {320, 240});
+    for (const FaceResult& f : run(half, 1.5).faces) EXPECT_LT(f.box.x1, 321.f);
+    EXPECT_EQ(face(1.6).faces.size(), 1u);
+    // The face heavily compressed (JPEG quality 2), and cut by the frame's border.
+    std::vector<std::uint8_t> jpeg;
+    cv::imencode(".jpg", faces[1], jpeg, {cv::IMWRITE_JPEG_QUALITY, 2});
+    run(cv::imdecode(jpeg, cv::IMREAD_COLOR), 1.7);
+    cv::Mat cut = cv::Mat::zeros(faces[2].size(), faces[2].type());
+    faces[2].colRange(0, faces[2].cols / 2).copyTo(cut.colRange(cut.cols / 2, cut.cols));
+    run(cut, 1.8);
+    // Four faces at once (max_faces is 1: one of them is followed).
+    cv::Mat mosaic;
+    cv::Mat top, bottom;
+    cv::hconcat(faces[3], faces[4], top);
+    cv::hconcat(faces[5], faces[6], bottom);
+    cv::vconcat(top, bottom, mosaic);
+    EXPECT_EQ(run(mosaic, 1.9).faces.size(), 1u);
+    // A pixel format that is not one: refused, and the tracker goes on.
+    EXPECT_THROW(tracker.process(ImageView{faces[0].data, 640, 480, faces[0].step[0], static_cast<PixelFormat>(9)}, 2.0), Error);
+    EXPECT_EQ(face(2.1).faces.size(), 1u);
 }
 
 // The face leaves (frames blanked) and comes back: no face while it is away,

@@ -17,6 +17,8 @@ packages=(
   opencv-data libdlib-dev libdlib-data
   # facetrack send: OSC encoding for the VMC protocol
   liboscpack-dev
+  # fuzzing (tools/fuzz.sh): clang and its libFuzzer runtime
+  clang libclang-rt-14-dev
   # headless rendering for the demo's test, and video decoding
   xvfb xauth ffmpeg
   # CNN training (tools/train_cnn, Debian's python3): torch on the CPU, with the threaded

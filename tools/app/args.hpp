@@ -4,6 +4,7 @@
 
 #include "facetrack/error.hpp"
 
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -45,6 +46,21 @@ public:
         } catch (const std::exception&) {
         }
         throw Error("option " + name + " expects a number, got '" + get(name) + "'");
+    }
+
+    /// A whole number within int's range: "1e12", "2.5" or "nan" is an error
+    /// (a cast from such a double to int is undefined behaviour).
+    int integer(const std::string& name, int fallback) const {
+        if (!has(name)) return fallback;
+        const std::string& text = options_.at(name);
+        try {
+            std::size_t used = 0;
+            const long long v = std::stoll(text, &used);
+            if (used == text.size() && v >= std::numeric_limits<int>::min() && v <= std::numeric_limits<int>::max())
+                return static_cast<int>(v);
+        } catch (const std::exception&) {
+        }
+        throw Error("option " + name + " expects a whole number, got '" + text + "'");
     }
 
 private:

@@ -18,12 +18,12 @@ DetectorConfig detectorConfig(const Args& args) {
 TrackerConfig trackerConfig(const Args& args) {
     TrackerConfig config;
     config.detector = detectorConfig(args);
-    config.max_faces = static_cast<int>(args.number("--max-faces", config.max_faces));
+    config.max_faces = args.integer("--max-faces", config.max_faces);
     config.camera.horizontal_fov_deg = args.number("--fov", config.camera.horizontal_fov_deg);
     config.camera.focal_length_px = args.number("--focal", config.camera.focal_length_px);
-    config.calibration_frames = static_cast<int>(args.number("--calibration-frames", config.calibration_frames));
+    config.calibration_frames = args.integer("--calibration-frames", config.calibration_frames);
     config.expression_prior = static_cast<float>(args.number("--expression-prior", config.expression_prior));
-    config.landmark_starts = static_cast<int>(args.number("--landmark-starts", config.landmark_starts));
+    config.landmark_starts = args.integer("--landmark-starts", config.landmark_starts);
     config.filter.enabled = !args.has("--no-filter");
     config.filter.min_cutoff_hz = args.number("--filter-cutoff", config.filter.min_cutoff_hz);
     config.filter.beta = args.number("--filter-beta", config.filter.beta);

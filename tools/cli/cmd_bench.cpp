@@ -32,7 +32,7 @@ int runBench(const std::vector<std::string>& argv) {
     }
     if (args.positional().size() != 1) throw Error("give one clip (see --help)");
     const std::string clip = args.positional()[0];
-    const auto frames = readAllFrames(clip, static_cast<int>(args.number("--frames", -1)), parseSize(args.get("--size")));
+    const auto frames = readAllFrames(clip, args.integer("--frames", -1), parseSize(args.get("--size")));
     Tracker tracker(trackingModels(args), trackerConfig(args));
 
     std::vector<std::string> stageOrder;

@@ -217,7 +217,7 @@ int runEvalGaze(const std::vector<std::string>& argv) {
     }
     const std::string split = args.get("--split", "validation");
     if (split != "none") eval300W(shared, tools::parseSplit(split), models, config);
-    const int synthetic = static_cast<int>(args.number("--synthetic", 400));
+    const int synthetic = args.integer("--synthetic", 400);
     if (synthetic > 0) evalSyntheticGaze(synthetic, models, config);
     return 0;
 }

@@ -118,7 +118,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
 
     std::vector<Method> methods;
     const auto lbf = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
-    const int starts = static_cast<int>(args.number("--landmark-starts", TrackerConfig{}.landmark_starts));
+    const int starts = args.integer("--landmark-starts", TrackerConfig{}.landmark_starts);
     landmarks::checkStartCount(starts, "--landmark-starts");
     auto pipeline = std::make_shared<StillLandmarks>(lbf, args.get("--cascade", ""), args.has("--lbf-only"), "yunet", starts);
     int dropped = 0;

@@ -86,7 +86,7 @@ int runEvalTrack(const std::vector<std::string>& argv) {
 
     std::printf("  %-26s %9s %9s %10s\n", "method", "face", "fps", "jitter");
     for (const auto& clip : args.positional()) {
-        const auto frames = readAllFrames(clip, static_cast<int>(args.number("--frames", -1)), parseSize(args.get("--size")));
+        const auto frames = readAllFrames(clip, args.integer("--frames", -1), parseSize(args.get("--size")));
         std::printf("%s (%zu frames, %dx%d)\n", clip.c_str(), frames.size(), frames[0].bgr.cols, frames[0].bgr.rows);
 
         Tracker tracker(models, config);

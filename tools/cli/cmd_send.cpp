@@ -72,9 +72,9 @@ int runSend(const std::vector<std::string>& argv) {
     if (!args.positional().empty()) throw Error("unexpected '" + args.positional()[0] + "' (see --help)");
     if (!args.has("--protocol")) throw Error("give --protocol vmc|ifacialmocap|openseeface");
     const send::Protocol protocol = send::parseProtocol(args.get("--protocol"));
-    const long maxFrames = static_cast<long>(args.number("--frames", -1));
+    const long maxFrames = static_cast<long>(args.integer("--frames", -1));
     std::optional<int> listenPort;
-    if (args.has("--listen-port")) listenPort = static_cast<int>(args.number("--listen-port", 0));
+    if (args.has("--listen-port")) listenPort = args.integer("--listen-port", 0);
 
     Models models = trackingModels(args);
     send::Sender sender(protocol, args.get("--to", "127.0.0.1"), models.face, listenPort);

@@ -102,7 +102,7 @@ int run(int argc, char** argv) {
     }
     const std::string split = args.get("--split", "validation");
     if (split == "train") throw Error("eval_cnn measures held-out crops: --split validation or test");
-    const int starts = static_cast<int>(args.number("--starts", 5));
+    const int starts = args.integer("--starts", 5);
     const double yawDeg = args.number("--yaw-deg", 15.0), depth = args.number("--depth", 0.10);
     if (starts < 1) throw Error("--starts must be at least 1");
 
@@ -125,7 +125,7 @@ int run(int argc, char** argv) {
     std::mt19937 rng(23);
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::vector<RoundErrors> rounds(static_cast<std::size_t>(iterations + 1)), fromFit(static_cast<std::size_t>(iterations + 1));
-    const int profiledTries = static_cast<int>(args.number("--profiled", 0));
+    const int profiledTries = args.integer("--profiled", 0);
     constexpr int kBins = 5;  // |yaw| 15-30, ..., 75-90 deg
     std::vector<std::vector<RoundErrors>> binned(kBins, std::vector<RoundErrors>(static_cast<std::size_t>(iterations + 1)));
     std::vector<std::vector<RoundErrors>> binnedFit(kBins, std::vector<RoundErrors>(static_cast<std::size_t>(iterations + 1)));

@@ -281,7 +281,7 @@ int run(int argc, char** argv) {
     const std::string teacherDir = args.get("--teacher", "../shared/data/teacher");
     const std::string outDir = args.get("--out", "build/dense_labels");
     const std::string only = args.get("--only", "");
-    const int limit = static_cast<int>(args.number("--limit", 1e9));
+    const int limit = args.integer("--limit", 1000000000);
     std::filesystem::create_directories(outDir);
     nlohmann::json summary;
 
@@ -384,7 +384,7 @@ int run(int argc, char** argv) {
     const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
     const auto splits = splitsOf300W(root);
     const auto faces = dense::readTeacherMeshes(teacherDir + "/faces300w_iris.jsonl", teacherDir + "/faces300w_mesh.npy");
-    learnConvention(s, faces, splits, root, static_cast<int>(args.number("--convention-rounds", 3)), summary);
+    learnConvention(s, faces, splits, root, args.integer("--convention-rounds", 3), summary);
     if (only.empty() || only == "300w") label300W(s, faces, splits, root, outDir, limit, summary);
     if (only.empty() || only == "clips") labelClips(s, teacherDir, outDir, limit, summary);
     const std::string summaryPath = outDir + "/summary" + (only.empty() ? "" : "_" + only) + ".json";

@@ -231,16 +231,16 @@ int run(int argc, char** argv) {
     }
     const std::string labels = args.get("--labels", "build/dense_labels"), outDir = args.get("--out", "build/cnn_samples");
     Perturbation perturb;
-    perturb.count = static_cast<int>(args.number("--perturb", 0));
+    perturb.count = args.integer("--perturb", 0);
     perturb.rotation_deg = args.number("--rotation-deg", perturb.rotation_deg);
     perturb.yaw_deg = args.number("--yaw-deg", perturb.yaw_deg);
     perturb.translation = args.number("--translation", perturb.translation);
     perturb.depth = args.number("--depth", perturb.depth);
     Perturbation clipPerturb = perturb;
-    clipPerturb.count = static_cast<int>(args.number("--clip-perturb", perturb.count));
+    clipPerturb.count = args.integer("--clip-perturb", perturb.count);
     perturb.expression_sigma = args.number("--expression-sigma", perturb.expression_sigma);
-    const auto limit = static_cast<std::size_t>(args.number("--limit", 1e9));
-    const int profiled = static_cast<int>(args.number("--profiled", 0));
+    const auto limit = static_cast<std::size_t>(args.integer("--limit", 1000000000));
+    const int profiled = args.integer("--profiled", 0);
     if (perturb.count < 0 || clipPerturb.count < 0 || profiled < 0) throw Error("--perturb, --clip-perturb and --profiled must not be negative");
     std::filesystem::create_directories(outDir);
 

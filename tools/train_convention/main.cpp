@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
         fit::FitSettings poseOnly;
         poseOnly.expression_l2 = 1.0;  // expressions held near 0: the residual is the convention
         fit::LandmarkConvention convention;
-        const int rounds = static_cast<int>(args.number("--rounds", 3));
+        const int rounds = args.integer("--rounds", 3);
         for (int round = 0; round < rounds; ++round) {
             std::vector<std::vector<Eigen::Vector3d>> displacements(model::kLandmarkCount);
             const double residual = fitAll(std::make_shared<const fit::FitBasis>(basis), poseOnly, train, &displacements, nullptr);

@@ -519,7 +519,7 @@ std::pair<double, double> cornerError(const CornerSet& set) {
 /// facetrack's landmarks put them) stage by stage and prints their error.
 std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::pair<const char*, CornerSet*>> reports,
                                             const tools::Args& args, unsigned seed) {
-    const int stages = static_cast<int>(args.number("--corner-stages", 4));
+    const int stages = args.integer("--corner-stages", 4);
     if (stages < 1 || static_cast<std::size_t>(stages) > kMaxCornerStages)
         throw Error("--corner-stages must be 1.." + std::to_string(kMaxCornerStages));
     const auto report = [&](const char* when) {
@@ -539,8 +539,8 @@ std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::p
         std::vector<PatchSample> samples;
         for (std::size_t p = 0; p < patches.size(); ++p) samples.push_back({static_cast<int>(p), 0, 0});
         ForestTrainingOptions o;
-        o.trees = static_cast<int>(args.number("--corner-trees", 48));
-        o.depth = static_cast<int>(args.number("--corner-depth", 9));
+        o.trees = args.integer("--corner-trees", 48);
+        o.depth = args.integer("--corner-depth", 9);
         o.min_leaf = 4;
         o.samples_per_tree = static_cast<int>(samples.size());
         o.search_samples = 6000;
@@ -586,7 +586,7 @@ int main(int argc, char** argv) {
             const std::string path = args.get("--iris-net", "");
             return core::readFileBytes(path, "the iris net '" + path + "'");
         };
-        const unsigned seed = static_cast<unsigned>(args.number("--seed", 1));
+        const unsigned seed = static_cast<unsigned>(args.integer("--seed", 1));
         // The corner cascade: 300-W train (eight jittered copies per eye) and renders (four);
         // reported on 300-W validation and on every tenth render, kept back.
         const auto cornerCascade = [&](std::ostringstream& provenance) {
@@ -594,7 +594,7 @@ int main(int argc, char** argv) {
             CornerSet train, validation, renders;
             addCorners300W(train, tools::Split::Train, &cornerJitter, 8);
             addCorners300W(validation, tools::Split::Validation, nullptr, 0);
-            const int synthetic = static_cast<int>(args.number("--corner-synthetic", 12000));
+            const int synthetic = args.integer("--corner-synthetic", 12000);
             addCornersSynthetic(renders, synthetic, seed + 2000, cornerJitter, 4);
             CornerSet keptBack;  // every tenth render, its eyes cut at the landmarks only
             std::vector<int> moved(renders.grays.size());
@@ -657,7 +657,7 @@ int main(int argc, char** argv) {
                         train.eyes.size(), heldClips.eyes.size(), seconds());
         }
         std::sort(trainClips.begin(), trainClips.end());
-        const int synthetic = static_cast<int>(args.number("--synthetic", 2500));
+        const int synthetic = args.integer("--synthetic", 2500);
         Dataset synth;
         addSynthetic(synth, synthetic, seed + 1000, jitter);
         std::printf("synthetic: %zu eye patches from %d renders (%.0f s)\n", synth.eyes.size(), synthetic, seconds());
@@ -678,8 +678,8 @@ int main(int argc, char** argv) {
         // (docs/benchmarks.md), so they go there only when asked.
         const PixelSet pixels = pixelSamples(train, 64, seed, args.has("--synthetic-pixels"));
         ForestTrainingOptions po;
-        po.trees = static_cast<int>(args.number("--pixel-trees", 8));
-        po.depth = static_cast<int>(args.number("--pixel-depth", 10));
+        po.trees = args.integer("--pixel-trees", 8);
+        po.depth = args.integer("--pixel-depth", 10);
         po.seed = seed;
         po.draw = drawPixelTest;
         std::mutex printing;
@@ -707,8 +707,8 @@ int main(int argc, char** argv) {
             apertures.targets.push_back(e.labels.aperture);
         }
         ForestTrainingOptions ao;
-        ao.trees = static_cast<int>(args.number("--aperture-trees", 48));
-        ao.depth = static_cast<int>(args.number("--aperture-depth", 9));
+        ao.trees = args.integer("--aperture-trees", 48);
+        ao.depth = args.integer("--aperture-depth", 9);
         ao.min_leaf = 4;
         ao.samples_per_tree = static_cast<int>(apertures.samples.size());
         ao.search_samples = 6000;

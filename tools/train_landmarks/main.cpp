@@ -149,14 +149,14 @@ int run(int argc, char** argv) {
     const std::string data = faces300wRoot(args.get("--data"));
     const std::string out = args.get("--out", "models/landmarks_lbf.ftm");
     landmarks::LbfTrainingOptions o;
-    o.stages = static_cast<int>(args.number("--stages", o.stages));
-    o.trees_per_landmark = static_cast<int>(args.number("--trees", o.trees_per_landmark));
-    o.tree_depth = static_cast<int>(args.number("--depth", o.tree_depth));
-    o.threads = static_cast<int>(args.number("--threads", o.threads));
-    o.seed = static_cast<std::uint64_t>(args.number("--seed", 1));
+    o.stages = args.integer("--stages", o.stages);
+    o.trees_per_landmark = args.integer("--trees", o.trees_per_landmark);
+    o.tree_depth = args.integer("--depth", o.tree_depth);
+    o.threads = args.integer("--threads", o.threads);
+    o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1));
     o.ridge = static_cast<float>(args.number("--ridge", o.ridge));
     o.progress = progressBar;
-    const int inits = static_cast<int>(args.number("--inits", 6));
+    const int inits = args.integer("--inits", 6);
 
     // Images and their variants.
     const auto train = list300W(data, Split::Train);

@@ -73,6 +73,7 @@ public:
     void getArray(T* values, std::size_t count) {
         static_assert(std::is_trivially_copyable_v<T>);
         if (count > remaining() / sizeof(T)) fail("array of " + std::to_string(count) + " elements");
+        if (count == 0) return;  // an empty vector's data() may be null, which memcpy must not get
         std::memcpy(values, take(sizeof(T) * count), sizeof(T) * count);
     }
     template <class T>
