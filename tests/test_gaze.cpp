@@ -410,6 +410,22 @@ TEST(GazeWeights, BlinkAndWideFromOpenness) {
     EXPECT_NEAR(wideWeight(1.25f), 0.5f, 1e-5f);
 }
 
+/// The expected lid gap when looking down comes from the face model's eyeLookDown shapes.
+TEST(LidsFollowingGaze, TheFaceModelsLidsCloseAsItsEyesLookDown) {
+    if (!std::filesystem::exists(test::sourceDir() + "/models/face_model.ftm")) GTEST_SKIP() << "models/face_model.ftm missing";
+    const auto model = FaceModel::loadDefault();
+    const LidsFollowingGaze lids(*model);
+    EXPECT_NEAR(lids.share(0.f), 1.f, 1e-6f);
+    EXPECT_NEAR(lids.share(10.f), 1.f, 1e-6f) << "looking up is not a narrower eye";
+    for (float pitch = 0.f; pitch > -40.f; pitch -= 1.f) EXPECT_LE(lids.share(pitch - 1.f), lids.share(pitch) + 1e-6f) << pitch;
+    EXPECT_NEAR(lids.share(-40.f), lids.share(-kLookDownFullDeg), 1e-6f);
+
+    // The model's lids do follow its eyes (ICT-FaceKit's eyeLookDown, from scans of people): about
+    // half the gap at 25 degrees down, as the aperture forest reads on the renders (docs/gaze.md).
+    EXPECT_GT(lids.share(-25.f), 0.3f);
+    EXPECT_LT(lids.share(-25.f), 0.8f);
+}
+
 /// The synthetic renderer's face, tracked from its own landmarks' box with the renderer's camera.
 class GazeOnRenders : public ::testing::Test {
 protected:
@@ -540,6 +556,32 @@ TEST_F(GazeOnRenders, AWinkIsOneEyeAndBothClosedHoldTheGaze) {
         EXPECT_TRUE(std::isfinite(now.yaw_deg) && std::isfinite(now.pitch_deg));
         EXPECT_LT(angleDeg(now.direction_head, before.direction_head), 0.5) << "the gaze moved while the eyes were closed";
     }
+}
+
+/// A user looking down at the keyboard after looking at the screen: the lids
+/// lower with the eyes, and that is not a blink (the expected lid gap follows
+/// the gaze as the face model's lids do; with 1.2 % per degree it read 0.67).
+TEST_F(GazeOnRenders, LookingDownAfterLookingAheadIsNotABlink) {
+    tracker_->reset();
+    const auto& names = models_.face->expressionNames();
+    int frame = 0;
+    for (; frame < 40; ++frame) ASSERT_EQ(track(face(0, 0), frame / 30.0).faces.size(), 1u);
+    tools::SyntheticFace down = face(0, -25);
+    for (const char* n : {"eyeLookDown_L", "eyeLookDown_R"})
+        down.expression[static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin())] = 25.f / kLookDownFullDeg;
+    float largestBlink = 0.f, pitch = 0.f;
+    for (int i = 0; i < 12; ++i, ++frame) {
+        const FrameResult r = track(down, frame / 30.0);
+        ASSERT_EQ(r.faces.size(), 1u);
+        ASSERT_TRUE(r.faces[0].gaze);
+        const auto& arkit = r.faces[0].expression->arkit;
+        for (const char* blink : {"eyeBlinkLeft", "eyeBlinkRight"})
+            largestBlink = std::max(largestBlink, arkit[static_cast<std::size_t>(arkitIndex(blink))]);
+        pitch = r.faces[0].gaze->right.pitch_deg;
+    }
+    std::printf("looking down 25 deg after 40 frames ahead: largest eyeBlink %.2f, pitch after 12 frames %.1f deg\n", largestBlink, pitch);
+    EXPECT_LT(largestBlink, 0.5f);
+    EXPECT_LT(pitch, -15.f);
 }
 
 TEST_F(GazeOnRenders, AnEyeAtTheFramesBorderGivesFiniteValues) {

@@ -32,7 +32,7 @@ namespace facetrack::cli {
 
 namespace {
 
-const char* kUsage = R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [tracker options]
+const char* kUsage = R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [--bare-faces] [tracker options]
 The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, not ground truth):
   pupil    pupil centre vs the teacher's iris centre, open eyes only (aperture >= 0.8 of the
            clip's median), over the outer-eye-corner distance: mean and p95
@@ -41,7 +41,9 @@ The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, 
            frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5
   synthetic  N renders of the face model with a textured iris at known gaze (see docs/gaze.md):
            angular error by inter-ocular bin, mean and p95; the mean signed error (bias) and the
-           single-frame head pose's error; then the targets' short sequences
+           single-frame head pose's error; then the targets' short sequences. The faces have
+           painted brows and lips; --bare-faces leaves them out (the renders until session 13,
+           on which the landmarks, trained on photographs, placed the brows by guesswork)
 --eyes FILE evaluates another eye model than the shipped one (e.g. a candidate from train_eyes).
 Defaults: the held-out clips liveportrait_d14_gaze_shifts.mp4 and fgnet_talking_face_franck.mp4,
 the 300-W validation split, 400 synthetic renders.)";
@@ -194,7 +196,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
 }  // namespace
 
 int runEvalGaze(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic"}), {"--help", "--no-filter"});
+    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic"}), {"--help", "--no-filter", "--bare-faces"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -218,7 +220,7 @@ int runEvalGaze(const std::vector<std::string>& argv) {
     const std::string split = args.get("--split", "validation");
     if (split != "none") eval300W(shared, tools::parseSplit(split), models, config);
     const int synthetic = args.integer("--synthetic", 400);
-    if (synthetic > 0) evalSyntheticGaze(synthetic, models, config);
+    if (synthetic > 0) evalSyntheticGaze(synthetic, models, config, args.has("--bare-faces"));
     return 0;
 }
 

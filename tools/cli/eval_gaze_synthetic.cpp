@@ -239,6 +239,28 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
     }
     std::printf("  looking down 25 deg: largest eyeBlink %.2f from the first frame, %.2f after 60 frames looking ahead (a blink is >= 0.5)\n",
                 downBlink[0], downBlink[1]);
+    // The same over other faces: inter-ocular 50 / 90 / 120 px, the head turned 0 or 20 degrees,
+    // after 20 or 60 frames looking ahead; the largest eyeBlink from the fourth frame looking down.
+    int blinks = 0, settings = 0;
+    double worst = 0;
+    for (const float iod : {50.f, 90.f, 120.f})
+        for (const float headYaw : {0.f, 20.f})
+            for (const int ahead : {20, 60}) {
+                tracker.reset();
+                double largest = 0;
+                for (int i = 0; i < ahead + 15; ++i) {
+                    tools::SyntheticFace f = sequenceFace(model, iod, 0, i < ahead ? 0.f : -25.f, 0, 0, 800u + static_cast<unsigned>(i));
+                    f.rotation = headRotation(headYaw, 0, 0);
+                    const FaceResult* r = step(f);
+                    if (r && i >= ahead + 3)
+                        largest = std::max(largest, static_cast<double>(std::max(blinkOf(*r, "eyeBlinkLeft"), blinkOf(*r, "eyeBlinkRight"))));
+                }
+                ++settings;
+                blinks += largest >= 0.5;
+                worst = std::max(worst, largest);
+            }
+    std::printf("  looking down 25 deg, inter-ocular 50 / 90 / 120 px, head turned 0 / 20 deg, after 20 / 60 frames ahead: "
+                "%d of %d read as a blink (largest eyeBlink %.2f)\n", blinks, settings, worst);
     // A wink: the left eye closed, the right open.
     tracker.reset();
     double openRight = 1, blinkLeft = 0;
@@ -311,8 +333,8 @@ void evalSyntheticTracked(int heads, const tools::SyntheticRenderer& renderer, T
     std::printf(" deg\n");
 }
 
-void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& config) {
-    tools::SyntheticRenderer renderer(models.face);
+void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& config, bool bareFaces) {
+    tools::SyntheticRenderer renderer(models.face, !bareFaces);
     // The renderer's camera, as a user who calibrated theirs would give it.
     TrackerConfig known = config;
     known.camera.focal_length_px = tools::SyntheticFace{}.fx;
@@ -384,8 +406,8 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
         }
     }
     std::vector<double> all;
-    std::printf("synthetic (%d renders: gaze yaw +-25, pitch +-20 deg; head yaw +-30; noise 2 grey levels, blur 0-1 px; %d without a gaze):\n",
-                renders, failed);
+    std::printf("synthetic (%d renders%s: gaze yaw +-25, pitch +-20 deg; head yaw +-30; noise 2 grey levels, blur 0-1 px; %d without a gaze):\n",
+                renders, bareFaces ? " of bare faces, no brows or lips" : "", failed);
     for (int b = 0; b < 4; ++b) {
         const auto& e = errors[static_cast<std::size_t>(b)];
         all.insert(all.end(), e.begin(), e.end());

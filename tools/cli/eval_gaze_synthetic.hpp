@@ -7,6 +7,7 @@
 
 namespace facetrack::cli {
 
-void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& config);
+/// `bareFaces`: renders without brows and lips (SyntheticRenderer's markings), as until session 13.
+void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& config, bool bareFaces = false);
 
 }  // namespace facetrack::cli

@@ -31,13 +31,72 @@ float irisShade(float radial, float angle) {
 }
 }  // namespace
 
-SyntheticRenderer::SyntheticRenderer(std::shared_ptr<const FaceModel> model) : model_(std::move(model)) {
+/// The skin's albedo at a point of the neutral mean face seen from the front
+/// (model frame x, y in mm): the brows, a band from 1 mm above the landmark
+/// convention's brow line (the line 300-W annotators trace along the brow's
+/// upper edge) to 5 mm below it at the inner end and 3 mm at the outer; the
+/// lips, inside the outer lip contour; skin elsewhere. A face without them is
+/// not a face to a landmark regressor trained on photographs: its brow points,
+/// and with them the head's pitch, were guesses (docs/gaze.md).
+class FaceMarkings {
+public:
+    explicit FaceMarkings(const FaceModel& model) {
+        const std::vector<Vec3> points = model.landmarkPoints(model.vertices({}, {}));
+        for (std::size_t i = 0; i < points.size(); ++i) landmarks_[i] = {points[i].x, points[i].y};
+        down_ = points[8].y > points[19].y ? 1.f : -1.f;
+    }
+
+    float albedo(const Eigen::Vector2f& p) const {
+        for (const auto& [first, inner] : {std::array<int, 2>{17, 21}, std::array<int, 2>{22, 22}}) {
+            float drop = 0.f, along = 0.f;
+            if (belowBrow(p, first, inner, drop, along) && drop >= -1.f && drop <= 5.f - 2.f * along) return 0.42f;
+        }
+        return insideLip(p) ? 0.72f : 1.f;
+    }
+
+private:
+    bool insideLip(const Eigen::Vector2f& p) const {
+        bool in = false;
+        for (std::size_t i = 48, j = 59; i < 60; j = i++) {
+            const Eigen::Vector2f &a = landmarks_[i], &b = landmarks_[j];
+            if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) in = !in;
+        }
+        return in;
+    }
+    /// How far p lies below a brow's line (mm, negative above it), and where
+    /// along the brow (0 inner end .. 1 outer); false outside the brow's span.
+    bool belowBrow(const Eigen::Vector2f& p, int first, int inner, float& drop, float& along) const {
+        for (int i = first; i < first + 4; ++i) {
+            const Eigen::Vector2f &a = landmarks_[static_cast<std::size_t>(i)], &b = landmarks_[static_cast<std::size_t>(i + 1)];
+            const float s = (p.x() - a.x()) / (b.x() - a.x());
+            if (!(s >= 0.f && s <= 1.f)) continue;
+            drop = down_ * (p.y() - (a.y() + s * (b.y() - a.y())));
+            along = std::fabs(static_cast<float>(i) + s - static_cast<float>(inner)) / 4.f;
+            return true;
+        }
+        return false;
+    }
+
+    std::array<Eigen::Vector2f, 68> landmarks_;
+    float down_ = 1.f;  // the sign of y from the brows towards the chin
+};
+
+SyntheticRenderer::SyntheticRenderer(std::shared_ptr<const FaceModel> model, bool markings) : model_(std::move(model)) {
     if (!model_) throw Error("SyntheticRenderer: no face model");
     const int face = model_->faceVertexCount();
     for (const auto& t : model_->triangles()) {
         if (t[0] < face && t[1] < face && t[2] < face) skin_.push_back(t);
     }
     landmark_vertices_ = model_->landmarkVertices();
+    // Where each vertex sits on the neutral face seen from the front: the brows
+    // and lips are painted there, per pixel. The sides of the head are plain skin.
+    const std::vector<Vec3> neutral = model_->vertices({}, {});
+    const float noseDepth = model_->landmarkPoints(neutral)[27].z;
+    for (int v = 0; v < face; ++v) {
+        const Vec3& p = neutral[static_cast<std::size_t>(v)];
+        neutral_front_.push_back({p.x, p.y, std::fabs(p.z - noseDepth) <= 25.f ? 1.f : 0.f});
+    }
+    if (markings) markings_ = std::make_shared<const FaceMarkings>(*model_);
 }
 
 Vec3 SyntheticRenderer::gazeInCamera(const SyntheticFace& f, int e) const {
@@ -98,6 +157,7 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f, ClassMap* classes) con
     for (const auto& tri : skin_) {
         std::array<Eigen::Vector2f, 3> p;
         std::array<float, 3> z, lit;
+        std::array<Eigen::Vector3f, 3> front;
         bool behind = false;
         for (int k = 0; k < 3; ++k) {
             const Eigen::Vector3f& v = cam[static_cast<std::size_t>(tri[static_cast<std::size_t>(k)])];
@@ -106,6 +166,8 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f, ClassMap* classes) con
             z[k] = v.z();
             const Eigen::Vector3f nn = normal[static_cast<std::size_t>(tri[static_cast<std::size_t>(k)])].normalized();
             lit[k] = 0.35f + 0.65f * std::fabs(nn.dot(light));  // either winding
+            const auto& n = neutral_front_[static_cast<std::size_t>(tri[static_cast<std::size_t>(k)])];
+            front[k] = {n[0], n[1], n[2]};
         }
         if (behind) continue;
         const float area = (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
@@ -125,7 +187,9 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f, ClassMap* classes) con
                 float& d = depth.at<float>(y, x);
                 if (zz >= d) continue;
                 d = zz;
-                shade.at<float>(y, x) = 185.f * f.skin * (w0 * lit[0] + w1 * lit[1] + w2 * lit[2]);
+                const Eigen::Vector3f at = w0 * front[0] + w1 * front[1] + w2 * front[2];
+                const float albedo = markings_ && at.z() > 0.99f ? markings_->albedo(at.head<2>()) : 1.f;
+                shade.at<float>(y, x) = 185.f * f.skin * albedo * (w0 * lit[0] + w1 * lit[1] + w2 * lit[2]);
             }
         }
     }

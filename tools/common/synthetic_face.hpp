@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include <array>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -40,7 +41,9 @@ using ClassMap = cv::Mat;  // CV_8U
 
 class SyntheticRenderer {
 public:
-    explicit SyntheticRenderer(std::shared_ptr<const FaceModel> model);
+    /// `markings`: brows and lips painted on the skin (false: the bare
+    /// mannequin the eye figures were measured on until session 13).
+    explicit SyntheticRenderer(std::shared_ptr<const FaceModel> model, bool markings = true);
     /// BGR, width x height; `classes`, when given, gets each pixel's class.
     cv::Mat render(const SyntheticFace& face, ClassMap* classes = nullptr) const;
     /// The true gaze direction of eye e (0 left, 1 right) in the camera frame.
@@ -58,6 +61,8 @@ private:
     std::shared_ptr<const FaceModel> model_;
     std::vector<std::array<int, 3>> skin_;  // face-skin triangles
     std::vector<int> landmark_vertices_;
+    std::vector<std::array<float, 3>> neutral_front_;  // per face vertex: (x, y) on the neutral face, 1 on its front (0 the sides)
+    std::shared_ptr<const class FaceMarkings> markings_;
 };
 
 }  // namespace facetrack::tools

@@ -19,6 +19,48 @@ namespace facetrack::gaze {
 float blinkWeight(float openness) { return std::clamp((0.8f - openness) / 0.55f, 0.f, 1.f); }
 float wideWeight(float ratio) { return std::clamp((ratio - 1.1f) / 0.3f, 0.f, 1.f); }
 
+LidsFollowingGaze::LidsFollowingGaze(const FaceModel& face) {
+    const auto& names = face.expressionNames();
+    std::array<int, 2> down{};
+    for (int e = 0; e < 2; ++e) {
+        const auto it = std::find(names.begin(), names.end(), e == 0 ? "eyeLookDown_L" : "eyeLookDown_R");
+        down[static_cast<std::size_t>(e)] = it == names.end() ? -1 : static_cast<int>(it - names.begin());
+    }
+    if (down[0] < 0 || down[1] < 0) {
+        for (int k = 0; k < kSamples; ++k) share_[static_cast<std::size_t>(k)] = std::max(0.55f, 1.f - 0.012f * 5.f * static_cast<float>(k));
+        return;
+    }
+    // Per eye (68-point numbering): corners, then upper and lower lid points facing each other.
+    struct Lids {
+        int outer, inner, upper1, upper2, lower1, lower2;
+    };
+    constexpr std::array<Lids, 2> kLids = {{{45, 42, 44, 43, 46, 47}, {36, 39, 37, 38, 41, 40}}};
+    const auto gap = [&](float weight) {
+        std::vector<float> w(names.size(), 0.f);
+        w[static_cast<std::size_t>(down[0])] = w[static_cast<std::size_t>(down[1])] = weight;
+        const std::vector<Vec3> p = face.landmarkPoints(face.vertices({}, w));
+        const auto at = [&](int i) { return p[static_cast<std::size_t>(i)]; };
+        float sum = 0.f;
+        for (const Lids& l : kLids) {
+            const float width = std::hypot(at(l.inner).x - at(l.outer).x, at(l.inner).y - at(l.outer).y);
+            sum += 0.5f * (std::fabs(at(l.upper1).y - at(l.lower1).y) + std::fabs(at(l.upper2).y - at(l.lower2).y)) / width;
+        }
+        return sum;
+    };
+    const float ahead = gap(0.f);
+    for (int k = 0; k < kSamples; ++k) {
+        const float weight = 5.f * static_cast<float>(k) / kLookDownFullDeg;
+        share_[static_cast<std::size_t>(k)] = ahead > 0.f ? std::clamp(gap(weight) / ahead, 0.05f, 1.f) : 1.f;
+    }
+}
+
+float LidsFollowingGaze::share(float pitchDeg) const {
+    const float x = std::clamp(-pitchDeg / 5.f, 0.f, static_cast<float>(kSamples - 1));
+    const int k = std::min(static_cast<int>(x), kSamples - 2);
+    const float t = x - static_cast<float>(k);
+    return (1.f - t) * share_[static_cast<std::size_t>(k)] + t * share_[static_cast<std::size_t>(k + 1)];
+}
+
 namespace {
 
 constexpr float kDeg = 3.14159265358979f / 180.f;
@@ -122,13 +164,36 @@ std::vector<int> gazeExpressions(const FaceModel& face) {
     return out;
 }
 
+/// An eye's aperture against what an open eye shows at a gaze pitch: the
+/// openness ratio (1 as open as the face's reference, 0 closed) and the eye's
+/// weight as data for the gaze fit.
+struct EyeReading {
+    float ratio = 0.f;
+    float weight = 0.f;
+};
+
+EyeReading readEye(const EyeModelData& model, const LidsFollowingGaze& lids, float forestAperture, float aperture, float reference,
+                   float pitchRad) {
+    // Looking down lowers the lids: the open eye's expected aperture follows the gaze pitch.
+    const float closed = model.closed_aperture;
+    const float expected = std::max(closed + (reference - closed) * lids.share(std::min(0.f, pitchRad) / kDeg), closed + 1e-3f);
+    EyeReading r;
+    r.ratio = (aperture - closed) / (expected - closed);
+    // Data only from an open eye (kDataFromOpenness), judged by the forest's reading alone
+    // (with the average, 300-W's pupil p95 rose from 0.048 to 0.051).
+    const float forestOpenness = (forestAperture - closed) / (expected - closed);
+    r.weight = std::clamp((forestOpenness - kDataFromOpenness) / 0.25f, 0.f, 1.f);
+    return r;
+}
+
 class GazeStage final : public pipeline::Stage {
 public:
     GazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face)
         : eyes_(std::move(eyes)),
           face_(std::move(face)),
           rigs_(EyeRig::both(*face_)),
-          shapes_(eyeShapes(*face_)) {
+          shapes_(eyeShapes(*face_)),
+          lids_(*face_) {
         if (!eyes_->data().iris_net.empty()) iris_net_.emplace(eyes_->data().iris_net, "eye model '" + eyes_->sourcePath() + "': its iris net");
     }
 
@@ -191,33 +256,32 @@ public:
             s.eyeball_sample.segment<3>(3 * e) = (R * c + t).cast<double>();
         }
         const Eigen::VectorXd& eyeballs = s.eyeball_smoothing(s.eyeball_sample, frame.dt);
+        std::array<float, 2> forestAperture{}, aperture{};
         for (int e = 0; e < 2; ++e) {
             EyeState& eye = s.eyes[static_cast<std::size_t>(e)];
             seen[e].centre = eyeballs.segment<3>(3 * e).cast<float>();
             if (!cut[e]) continue;
-            float forestAperture = 0.f;
-            model.aperture.evaluate(eye.patch.pixels, 0, 0, &forestAperture);
+            model.aperture.evaluate(eye.patch.pixels, 0, 0, &forestAperture[e]);
             // Two readings of one gap, averaged: the forest's alone read an eye looking down, its
             // lids lowered, as half closed frame by frame (docs/gaze.md).
-            const float aperture = 0.5f * (forestAperture + openMapAperture(eye.open));
-            // Looking down lowers the upper lid: the reference follows the (held) gaze pitch.
-            const float pitch = std::min(0.f, s.angles[static_cast<std::size_t>(e)].y()) / kDeg;
-            const float closed = model.closed_aperture;
-            const float expected = std::max(closed + (eye.reference - closed) * std::max(0.55f, 1.f + 0.012f * pitch), closed + 1e-3f);
-            ratio[e] = (aperture - closed) / (expected - closed);
-            openness[e] = std::clamp(ratio[e], 0.f, 1.f);
-            // The reference tracks this face's open-eye aperture (a quantile, robust to blinks).
-            const float step = kReferenceStep * std::max(1.f, kReferenceWarmup / static_cast<float>(++eye.samples));
-            eye.reference += step * (aperture > eye.reference ? kReferenceQuantile : kReferenceQuantile - 1.f);
-            eye.reference = std::clamp(eye.reference, closed + 0.6f * (model.open_aperture - closed),
-                                       closed + 1.6f * (model.open_aperture - closed));
+            aperture[e] = 0.5f * (forestAperture[e] + openMapAperture(eye.open));
             seen[e].patch = &eye.patch;
             seen[e].iris = &eye.iris;
             seen[e].open = &eye.open;
-            // Data only from an open eye (kDataFromOpenness), judged by the forest's reading alone
-            // (with the average, 300-W's pupil p95 rose from 0.048 to 0.051).
-            const float forestOpenness = (forestAperture - closed) / (expected - closed);
-            seen[e].weight = std::clamp((forestOpenness - kDataFromOpenness) / 0.25f, 0.f, 1.f);
+            const EyeReading reading = readEye(model, lids_, forestAperture[e], aperture[e], eye.reference, s.angles[static_cast<std::size_t>(e)].y());
+            ratio[e] = reading.ratio;
+            seen[e].weight = reading.weight;
+        }
+        probeLookingDown(model, cut, forestAperture, aperture, R, frame.camera, s, seen, ratio);
+        for (int e = 0; e < 2; ++e) {
+            if (!cut[e]) continue;
+            EyeState& eye = s.eyes[static_cast<std::size_t>(e)];
+            openness[e] = std::clamp(ratio[e], 0.f, 1.f);
+            // The reference tracks this face's open-eye aperture (a quantile, robust to blinks).
+            const float step = kReferenceStep * std::max(1.f, kReferenceWarmup / static_cast<float>(++eye.samples));
+            eye.reference += step * (aperture[e] > eye.reference ? kReferenceQuantile : kReferenceQuantile - 1.f);
+            eye.reference = std::clamp(eye.reference, model.closed_aperture + 0.6f * (model.open_aperture - model.closed_aperture),
+                                       model.closed_aperture + 1.6f * (model.open_aperture - model.closed_aperture));
         }
         const fit::Camera& camera = frame.camera;
         // Both eyes closed: the output holds exactly (the filter is not fed, so it does not catch up meanwhile).
@@ -250,6 +314,35 @@ public:
     }
 
 private:
+    /// An eye whose lids are lower than the held gaze pitch expects is closing
+    /// or looking down. Read at the held pitch alone it gives the fit too little
+    /// data to tell (a look-down after looking ahead read as a blink, docs/gaze.md);
+    /// so where an eye is partly covered, a probe fit with every visible eye as
+    /// full data asks where the irises are, and when at the probe's pitch the eye
+    /// would not read as a blink (eyeBlink < 0.5), its lids were following its
+    /// gaze and that reading stands. A closing lid over a still iris does not
+    /// pass: the iris stays up, so at its pitch the lids still read low.
+    void probeLookingDown(const EyeModelData& model, const std::array<bool, 2>& cut, const std::array<float, 2>& forestAperture,
+                          const std::array<float, 2>& aperture, const Eigen::Matrix3f& R, const fit::Camera& camera,
+                          const GazeFaceState& s, std::array<EyeObservation, 2>& seen, std::array<float, 2>& ratio) const {
+        bool partlyCovered = false;
+        std::array<EyeObservation, 2> probe = seen;
+        for (std::size_t e = 0; e < 2; ++e) {
+            partlyCovered = partlyCovered || (cut[e] && seen[e].weight < 1.f);
+            probe[e].weight = cut[e] && forestAperture[e] > model.closed_aperture ? 1.f : 0.f;
+        }
+        if (!partlyCovered) return;
+        const GazeAngles looked = fitGaze(probe, R, camera, s.angles, s.have_angles);
+        for (std::size_t e = 0; e < 2; ++e) {
+            if (!cut[e] || seen[e].weight >= 1.f) continue;
+            const EyeReading reading = readEye(model, lids_, forestAperture[e], aperture[e], s.eyes[e].reference, looked[e].y());
+            if (blinkWeight(reading.ratio) < 0.5f && reading.weight > seen[e].weight) {
+                ratio[e] = reading.ratio;
+                seen[e].weight = reading.weight;
+            }
+        }
+    }
+
     /// The iris and open maps of the eyes that were cut: by the iris CNN when the model has one, else the pixel forest.
     void classify(const EyeModelData& model, const std::array<bool, 2>& cut, GazeFaceState& s) {
         if (iris_net_) {
@@ -334,6 +427,7 @@ private:
     std::shared_ptr<const FaceModel> face_;
     std::array<EyeRig, 2> rigs_;
     std::array<EyeShapes, 2> shapes_;
+    LidsFollowingGaze lids_;
     std::optional<IrisNet> iris_net_;
 };
 

@@ -19,6 +19,7 @@
 #include "facetrack/eye_model.hpp"
 #include "facetrack/face_model.hpp"
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -36,5 +37,21 @@ float wideWeight(float apertureRatio);
 constexpr float kLookSidewaysFullDeg = 30.f;
 constexpr float kLookUpFullDeg = 25.f;
 constexpr float kLookDownFullDeg = 30.f;
+
+/// The share of its looking-ahead lid gap an open eye keeps when looking down
+/// by `pitchDeg` (<= 0), as the face model's eyeLookDown shapes lower the lids
+/// at weight -pitch / kLookDownFullDeg: the gap between its upper and lower lid
+/// landmarks over the eye width, relative to looking ahead, averaged over both
+/// eyes; held beyond kLookDownFullDeg. Samples every 5 degrees from 0 down.
+/// A model without eyeLookDown shapes: 1.2 % per degree down to 0.55.
+class LidsFollowingGaze {
+public:
+    explicit LidsFollowingGaze(const FaceModel& face);
+    float share(float pitchDeg) const;
+
+private:
+    static constexpr int kSamples = static_cast<int>(kLookDownFullDeg / 5.f) + 1;
+    std::array<float, kSamples> share_{};
+};
 
 }  // namespace facetrack::gaze
