@@ -7,7 +7,10 @@
 // Openness: the aperture over this face's own open-eye aperture (a running
 // 70th percentile, started at the model's), 0..1; each eye on its own, so a
 // wink is a wink. A closing eye gives the fit no data: its gaze follows the
-// other eye, or holds when both close, so a blink does not move the gaze.
+// other eye, or holds when both close, so a blink does not move the gaze. The
+// open gap expected follows the gaze pitch as the face model's lids do
+// (LidsFollowingGaze); an eye that reads partly closed is asked, by a probe
+// fit, whether its iris went down with its lids (a look-down, not a blink).
 //
 // Reads: landmarks, pose, identity. Fills: gaze, and the ARKit eye shapes
 // (native eyeBlink, eyeLook*, eyeWide of the face model, ARKit recomputed;
