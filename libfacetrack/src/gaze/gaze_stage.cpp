@@ -320,8 +320,9 @@ private:
     /// so where an eye is partly covered, a probe fit with every visible eye as
     /// full data asks where the irises are, and when at the probe's pitch the eye
     /// would not read as a blink (eyeBlink < 0.5), its lids were following its
-    /// gaze and that reading stands. A closing lid over a still iris does not
-    /// pass: the iris stays up, so at its pitch the lids still read low.
+    /// gaze: its openness is read at that pitch (its data weight too, where that
+    /// is higher). A closing lid over a still iris does not pass: the iris stays
+    /// up, so at its pitch the lids still read low.
     void probeLookingDown(const EyeModelData& model, const std::array<bool, 2>& cut, const std::array<float, 2>& forestAperture,
                           const std::array<float, 2>& aperture, const Eigen::Matrix3f& R, const fit::Camera& camera,
                           const GazeFaceState& s, std::array<EyeObservation, 2>& seen, std::array<float, 2>& ratio) const {
@@ -336,9 +337,9 @@ private:
         for (std::size_t e = 0; e < 2; ++e) {
             if (!cut[e] || seen[e].weight >= 1.f) continue;
             const EyeReading reading = readEye(model, lids_, forestAperture[e], aperture[e], s.eyes[e].reference, looked[e].y());
-            if (blinkWeight(reading.ratio) < 0.5f && reading.weight > seen[e].weight) {
+            if (blinkWeight(reading.ratio) < 0.5f && reading.ratio > ratio[e]) {
                 ratio[e] = reading.ratio;
-                seen[e].weight = reading.weight;
+                seen[e].weight = std::max(seen[e].weight, reading.weight);
             }
         }
     }
