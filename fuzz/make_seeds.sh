@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 corpus=fuzz/corpus
-rm -rf "$corpus" && mkdir -p "$corpus/fuzz_model_files" "$corpus/fuzz_tracker" "$corpus/fuzz_handshake"
+rm -rf "$corpus" && mkdir -p "$corpus/fuzz_model_files" "$corpus/fuzz_tracker" "$corpus/fuzz_handshake" "$corpus/fuzz_c_api"
 
 # Model files: per loader (the order of fuzz_model_files.cpp's kFormats), the
 # file's first 256 bytes as a whole file, and its payload's first 2 KB to be
@@ -39,6 +39,27 @@ frame noise_rgba 32 24 4 0 0 "$tmp/noise.raw"
 frame odd_stride 7 5 2 3 2 "$tmp/noise.raw"
 frame short_stride 8 8 0 255 1 "$tmp/noise.raw"
 frame empty 0 0 0 0 4 /dev/null
+
+# C API calls: a 32-byte header (fuzz_c_api.cpp), then pixels: frames as above,
+# a face read back, a neutral calibrated, a tracker from a configuration, an
+# older caller's smaller ft_frame_result.
+capi() {  # name call struct_offset width height format face_index config(8 comma-separated) file
+  /usr/bin/python3 -c '
+import struct, sys
+name, call, offset, w, h, fmt, index, config, pixels = sys.argv[1:]
+header = struct.pack("<BBhiihbbd", int(call), 0, int(offset), int(w), int(h), 0, int(fmt), int(index), 1 / 30)
+header += bytes(int(c) for c in config.split(","))
+sys.stdout.buffer.write(header + open(pixels, "rb").read())' "$@" > "$corpus/fuzz_c_api/$1"
+}
+defaults=1,5,30,60,0,1,10,30
+capi face_gray 0 0 160 120 0 0 $defaults "$tmp/face_gray.raw"
+capi face_bgr 0 0 96 72 1 0 $defaults "$tmp/face_bgr.raw"
+capi older_result 0 -8 160 120 0 0 $defaults "$tmp/face_gray.raw"
+capi face_read 1 0 0 0 0 0 $defaults /dev/null
+capi calibrate_neutral 4 0 0 0 0 0 $defaults /dev/null
+capi estimated 6 0 0 0 0 0 $defaults /dev/null
+capi create_and_process 7 0 160 120 0 0 $defaults "$tmp/face_gray.raw"
+capi create_older_config 7 -12 96 72 1 0 2,1,0,90,60,0,5,20 "$tmp/face_bgr.raw"
 
 # Datagrams: the two handshakes and a near miss.
 printf 'iFacialMocap_sahuasouryya9218sauhuiayeta91555dy3719' > "$corpus/fuzz_handshake/v1"
