@@ -93,10 +93,9 @@ void process(ft_tracker* t, const std::uint8_t* header, const std::uint8_t* pixe
     // buffer is the caller's bug, not a finding. Sizes it must refuse pass as they are.
     std::int32_t height = requestedHeight;
     const std::int64_t row = static_cast<std::int64_t>(width) * bytes;
-    if (width > 0 && requestedHeight > 0 && stride >= row) {
-        const std::int64_t rows = stride == 0 || static_cast<std::int64_t>(available) < row
-                                      ? 0
-                                      : 1 + (static_cast<std::int64_t>(available) - row) / std::max<std::int64_t>(stride, 1);
+    if (width > 0 && requestedHeight > 0 && stride >= row) {  // then stride >= row > 0
+        const auto held = static_cast<std::int64_t>(available);
+        const std::int64_t rows = held < row ? 0 : 1 + (held - row) / stride;
         height = static_cast<std::int32_t>(std::min<std::int64_t>(requestedHeight, rows));
     }
     ft_frame_result* result = (flags & 2) ? nullptr : allocate<ft_frame_result>(claimedSize(sizeof(ft_frame_result), read<std::int16_t>(header + 2)));

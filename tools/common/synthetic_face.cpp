@@ -40,8 +40,8 @@ float irisShade(float radial, float angle) {
 /// and with them the head's pitch, were guesses (docs/gaze.md).
 class FaceMarkings {
 public:
-    explicit FaceMarkings(const FaceModel& model) {
-        const std::vector<Vec3> points = model.landmarkPoints(model.vertices({}, {}));
+    /// `points`: the neutral face's landmarks (FaceModel::landmarkPoints).
+    explicit FaceMarkings(const std::vector<Vec3>& points) {
         for (std::size_t i = 0; i < points.size(); ++i) landmarks_[i] = {points[i].x, points[i].y};
         down_ = points[8].y > points[19].y ? 1.f : -1.f;
     }
@@ -91,12 +91,13 @@ SyntheticRenderer::SyntheticRenderer(std::shared_ptr<const FaceModel> model, boo
     // Where each vertex sits on the neutral face seen from the front: the brows
     // and lips are painted there, per pixel. The sides of the head are plain skin.
     const std::vector<Vec3> neutral = model_->vertices({}, {});
-    const float noseDepth = model_->landmarkPoints(neutral)[27].z;
+    const std::vector<Vec3> points = model_->landmarkPoints(neutral);
+    const float noseDepth = points[27].z;
     for (int v = 0; v < face; ++v) {
         const Vec3& p = neutral[static_cast<std::size_t>(v)];
         neutral_front_.push_back({p.x, p.y, std::fabs(p.z - noseDepth) <= 25.f ? 1.f : 0.f});
     }
-    if (markings) markings_ = std::make_shared<const FaceMarkings>(*model_);
+    if (markings) markings_ = std::make_shared<const FaceMarkings>(points);
 }
 
 Vec3 SyntheticRenderer::gazeInCamera(const SyntheticFace& f, int e) const {

@@ -19,48 +19,6 @@ namespace facetrack::gaze {
 float blinkWeight(float openness) { return std::clamp((0.8f - openness) / 0.55f, 0.f, 1.f); }
 float wideWeight(float ratio) { return std::clamp((ratio - 1.1f) / 0.3f, 0.f, 1.f); }
 
-LidsFollowingGaze::LidsFollowingGaze(const FaceModel& face) {
-    const auto& names = face.expressionNames();
-    std::array<int, 2> down{};
-    for (int e = 0; e < 2; ++e) {
-        const auto it = std::find(names.begin(), names.end(), e == 0 ? "eyeLookDown_L" : "eyeLookDown_R");
-        down[static_cast<std::size_t>(e)] = it == names.end() ? -1 : static_cast<int>(it - names.begin());
-    }
-    if (down[0] < 0 || down[1] < 0) {
-        for (int k = 0; k < kSamples; ++k) share_[static_cast<std::size_t>(k)] = std::max(0.55f, 1.f - 0.012f * 5.f * static_cast<float>(k));
-        return;
-    }
-    // Per eye (68-point numbering): corners, then upper and lower lid points facing each other.
-    struct Lids {
-        int outer, inner, upper1, upper2, lower1, lower2;
-    };
-    constexpr std::array<Lids, 2> kLids = {{{45, 42, 44, 43, 46, 47}, {36, 39, 37, 38, 41, 40}}};
-    const auto gap = [&](float weight) {
-        std::vector<float> w(names.size(), 0.f);
-        w[static_cast<std::size_t>(down[0])] = w[static_cast<std::size_t>(down[1])] = weight;
-        const std::vector<Vec3> p = face.landmarkPoints(face.vertices({}, w));
-        const auto at = [&](int i) { return p[static_cast<std::size_t>(i)]; };
-        float sum = 0.f;
-        for (const Lids& l : kLids) {
-            const float width = std::hypot(at(l.inner).x - at(l.outer).x, at(l.inner).y - at(l.outer).y);
-            sum += 0.5f * (std::fabs(at(l.upper1).y - at(l.lower1).y) + std::fabs(at(l.upper2).y - at(l.lower2).y)) / width;
-        }
-        return sum;
-    };
-    const float ahead = gap(0.f);
-    for (int k = 0; k < kSamples; ++k) {
-        const float weight = 5.f * static_cast<float>(k) / kLookDownFullDeg;
-        share_[static_cast<std::size_t>(k)] = ahead > 0.f ? std::clamp(gap(weight) / ahead, 0.05f, 1.f) : 1.f;
-    }
-}
-
-float LidsFollowingGaze::share(float pitchDeg) const {
-    const float x = std::clamp(-pitchDeg / 5.f, 0.f, static_cast<float>(kSamples - 1));
-    const int k = std::min(static_cast<int>(x), kSamples - 2);
-    const float t = x - static_cast<float>(k);
-    return (1.f - t) * share_[static_cast<std::size_t>(k)] + t * share_[static_cast<std::size_t>(k + 1)];
-}
-
 namespace {
 
 constexpr float kDeg = 3.14159265358979f / 180.f;
@@ -434,6 +392,44 @@ private:
 
 }  // namespace
 
+
+LidsFollowingGaze::LidsFollowingGaze(const FaceModel& face) {
+    const std::array<EyeShapes, 2> shapes = eyeShapes(face);
+    const std::array<int, 2> down = {shapes[0].lookDown, shapes[1].lookDown};
+    if (down[0] < 0 || down[1] < 0) {
+        for (int k = 0; k < kSamples; ++k) share_[static_cast<std::size_t>(k)] = std::max(0.55f, 1.f - 0.012f * 5.f * static_cast<float>(k));
+        return;
+    }
+    // Per eye (68-point numbering): corners, then upper and lower lid points facing each other.
+    struct Lids {
+        int outer, inner, upper1, upper2, lower1, lower2;
+    };
+    constexpr std::array<Lids, 2> kLids = {{{45, 42, 44, 43, 46, 47}, {36, 39, 37, 38, 41, 40}}};
+    const auto gap = [&](float weight) {
+        std::vector<float> w(face.expressionNames().size(), 0.f);
+        w[static_cast<std::size_t>(down[0])] = w[static_cast<std::size_t>(down[1])] = weight;
+        const std::vector<Vec3> p = face.landmarkPoints(face.vertices({}, w));
+        const auto at = [&](int i) { return p[static_cast<std::size_t>(i)]; };
+        float sum = 0.f;
+        for (const Lids& l : kLids) {
+            const float width = std::hypot(at(l.inner).x - at(l.outer).x, at(l.inner).y - at(l.outer).y);
+            sum += 0.5f * (std::fabs(at(l.upper1).y - at(l.lower1).y) + std::fabs(at(l.upper2).y - at(l.lower2).y)) / width;
+        }
+        return sum;
+    };
+    const float ahead = gap(0.f);
+    for (int k = 0; k < kSamples; ++k) {
+        const float weight = 5.f * static_cast<float>(k) / kLookDownFullDeg;
+        share_[static_cast<std::size_t>(k)] = ahead > 0.f ? std::clamp(gap(weight) / ahead, 0.05f, 1.f) : 1.f;
+    }
+}
+
+float LidsFollowingGaze::share(float pitchDeg) const {
+    const float x = std::clamp(-pitchDeg / 5.f, 0.f, static_cast<float>(kSamples - 1));
+    const int k = std::min(static_cast<int>(x), kSamples - 2);
+    const float t = x - static_cast<float>(k);
+    return (1.f - t) * share_[static_cast<std::size_t>(k)] + t * share_[static_cast<std::size_t>(k + 1)];
+}
 
 std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
                                                bool haveFit) {
