@@ -29,6 +29,7 @@ namespace {
 const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
                                 [--cascade FILE] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
                                 [--plot ced.png] [--max-error 0.08] [--landmark-starts N]
+                                [--tracked-frames N]
 Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
 YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
 root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
@@ -39,6 +40,9 @@ Methods, side by side with the same boxes:
                            keeps LBF's landmarks (counted as "dropped")
   facetrack LBF, N starts  --model (default: the shipped landmarks_lbf.ftm) from --landmark-starts N
                            starts, averaged (default 5, the tracker's), and from one start
+  facetrack tracked        --tracked-frames N: the tracker (LBF + fit, no CNN, no filter) given the
+                           box on the first of N copies of the image, the landmarks of the last:
+                           tracking mode, where each frame's LBF starts from the previous fit
   OpenCV FacemarkLBF       --facemark FILE, a model trained by tools' train_facemark
   dlib shape_predictor     --dlib FILE (default /usr/share/dlib/shape_predictor_68_face_landmarks.dat)
 Prints per method: faces, mean and median NME (300-W: mean point error over the
@@ -62,6 +66,32 @@ Method ourLbf(std::shared_ptr<const LandmarkModel> model, int starts) {
     return {"facetrack LBF, " + std::to_string(starts) + (starts == 1 ? " start" : " starts"),
             [model, starts](const cv::Mat&, const cv::Mat& gray, const Box& box) {
                 return Shape2(landmarks::alignFromStarts(model->data(), gray, landmarks::shapeFromBox(model->data(), box, "yunet"), starts));
+            }};
+}
+
+/// The tracker in tracking mode on a still face: the box starts it, then `frames` - 1 more copies
+/// of the image are tracked. A face it drops keeps the first copy's LBF landmarks, counted in `dropped`.
+Method trackedStill(std::shared_ptr<const LandmarkModel> model, int starts, int frames, int& dropped) {
+    TrackerConfig config;
+    config.filter.enabled = false;
+    config.max_faces = 1;
+    config.landmark_starts = starts;
+    auto tracker = std::make_shared<Tracker>(Models{FaceModel::loadDefault(), model, nullptr, nullptr}, config);
+    auto result = std::make_shared<FrameResult>();
+    return {"facetrack tracked, frame " + std::to_string(frames),
+            [model, starts, frames, tracker, result, &dropped](const cv::Mat& bgr, const cv::Mat& gray, const Box& box) {
+                tracker->reset();
+                for (int f = 0; f < frames; ++f) {
+                    const double t = f / 30.0;
+                    if (f == 0) tracker->process(tools::viewOf(bgr), t, {box}, *result);
+                    else tracker->process(tools::viewOf(bgr), t, {}, *result);
+                    if (result->faces.empty() || !result->faces[0].landmarks) {
+                        ++dropped;
+                        return Shape2(landmarks::alignFromStarts(model->data(), gray,
+                                                                 landmarks::shapeFromBox(model->data(), box, "yunet"), starts));
+                    }
+                }
+                return Shape2(landmarks::fromLandmarks68(*result->faces[0].landmarks));
             }};
 }
 
@@ -104,7 +134,8 @@ Method dlibShapePredictor(const std::string& path, bool seenInTraining) {
 }  // namespace
 
 int runEvalLandmarks(const std::vector<std::string>& argv) {
-    const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts"},
+    const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts",
+                                 "--tracked-frames"},
                     {"--help", "--lbf-only"});
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -131,6 +162,10 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         });
     }
     methods.push_back(ourLbf(lbf, starts));
+    int trackedDropped = 0;
+    const int trackedFrames = args.integer("--tracked-frames", 0);
+    if (trackedFrames < 0 || trackedFrames > 1000) throw Error("--tracked-frames must be in 0..1000");
+    if (trackedFrames > 0) methods.push_back(trackedStill(lbf, starts, trackedFrames, trackedDropped));
     if (starts != 1) methods.push_back(ourLbf(lbf, 1));
     if (args.has("--facemark")) methods.push_back(facemarkLbf(args.get("--facemark")));
     const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
@@ -172,6 +207,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
 
     std::printf("%zu faces, %d without a YuNet box (left out)\n", faces.size(), missed);
     if (pipeline->usesPipeline()) std::printf("%s: %d faces dropped by the fit (LBF's landmarks kept)\n", pipeline->method().c_str(), dropped);
+    if (trackedFrames > 0) std::printf("facetrack tracked: %d faces dropped by the tracker (LBF's landmarks kept)\n", trackedDropped);
     std::printf("%-40s %6s %9s %9s %10s %9s %9s\n", "method", "faces", "mean NME", "median", "fail@8%", "AUC@8%", "ms/face");
     std::vector<CedCurve> curves;
     for (const auto& m : methods) {
