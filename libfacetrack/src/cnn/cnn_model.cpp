@@ -16,6 +16,11 @@ constexpr int kMaxStages = 8, kMaxRounds = 8;
 void validate(const CnnModelData& m, const std::string& what) {
     if (m.patch_size < 16 || m.patch_size > 256) throw Error(what + ": corrupt: patch size");
     if (m.stages.empty() || m.stages.size() > kMaxStages) throw Error(what + ": corrupt: stage count");
+    if (!m.neutral.empty() && m.neutral.size() != m.expressions.size()) throw Error(what + ": corrupt: neutral weights");
+    if (!m.reported.empty() && m.reported.size() != m.expressions.size()) throw Error(what + ": corrupt: reported expressions");
+    for (const float w : m.neutral) {
+        if (!(w >= 0.f && w < 1.f)) throw Error(what + ": corrupt: a neutral weight outside [0, 1)");
+    }
     for (const auto& s : m.stages) {
         if (s.rounds < 1 || s.rounds > kMaxRounds || s.onnx.empty()) throw Error(what + ": corrupt: a stage");
     }
@@ -45,12 +50,18 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     }
     w.putString(m.landmark_net);
     w.putString(m.provenance);
+    w.put<std::uint8_t>(m.expressions_only ? 1 : 0);
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(m.neutral.size()));
+    for (const float v : m.neutral) w.put<float>(v);
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(m.reported.size()));
+    for (const bool v : m.reported) w.put<std::uint8_t>(v ? 1 : 0);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
 CnnModelData readCnnModel(const std::string& path) {
     const std::string what = "CNN cascade '" + path + "'";
-    const std::string payload = core::readModelFile(path, kCnnModelMagic, kCnnModelVersion, "CNN cascade");
+    std::uint32_t version = 0;
+    const std::string payload = core::readModelFile(path, kCnnModelMagic, 2, kCnnModelVersion, "CNN cascade", version);
     core::BinaryReader r(payload, what);
     CnnModelData m;
     m.patch_size = r.get<std::int32_t>();
@@ -67,6 +78,21 @@ CnnModelData readCnnModel(const std::string& path) {
     }
     m.landmark_net = r.getString();
     m.provenance = r.getString();
+    if (version >= 3) {
+        const auto mode = r.get<std::uint8_t>();
+        if (mode > 1) r.fail("mode");
+        m.expressions_only = mode == 1;
+        const auto neutral = r.get<std::uint32_t>();
+        if (neutral > names) r.fail("neutral weight count");
+        for (std::uint32_t i = 0; i < neutral; ++i) m.neutral.push_back(r.get<float>());
+        const auto reported = r.get<std::uint32_t>();
+        if (reported > names) r.fail("reported expression count");
+        for (std::uint32_t i = 0; i < reported; ++i) {
+            const auto flag = r.get<std::uint8_t>();
+            if (flag > 1) r.fail("a reported flag");
+            m.reported.push_back(flag == 1);
+        }
+    }
     r.expectEnd();
     validate(m, what);
     return m;
@@ -98,5 +124,7 @@ std::vector<int> CnnModel::rounds() const {
 }
 
 bool CnnModel::hasLandmarkNet() const { return !data_->landmark_net.empty(); }
+
+bool CnnModel::expressionsOnly() const { return data_->expressions_only; }
 
 }  // namespace facetrack

@@ -17,13 +17,25 @@ struct CnnModelData {
     /// The nets' expression outputs, native face model names, in output order.
     std::vector<std::string> expressions;
     std::vector<CnnStageData> stages;
+    /// The nets were trained to read the expressions (train_stage.py --expressions): the stage then
+    /// keeps the fit's pose and the shapes the fit estimates, and reports the others. False: it
+    /// refines the pose and all its expressions. (Format version 3; version 2 files refine.)
+    bool expressions_only = false;
+    /// Per expression (empty: none), the teacher labels' value on a typical face, w0: the median
+    /// over the 300-W training crops. The stage reports (w - w0) / (1 - w0), clamped to [0, 1]:
+    /// the labels read browDown 0.23 on the median face, and a net trained on them does the same
+    /// on a relaxed one (docs/cnn.md). Format version 3.
+    std::vector<float> neutral;
+    /// Per expression (empty: all), whether an expressions-only stage reports it: the packer keeps
+    /// those whose estimate agreed with the labels on the validation crops (docs/cnn.md). Version 3.
+    std::vector<bool> reported;
     /// The final net, the 68 landmarks' displacements (landmark_net.hpp): ONNX bytes, or empty for none.
     std::string landmark_net;
     std::string provenance;
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 2;
+constexpr std::uint32_t kCnnModelVersion = 3;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

@@ -23,10 +23,16 @@ struct CnnFaceState final : pipeline::StageState {
 
 class CnnStage final : public pipeline::Stage {
 public:
-    CnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face)
+    CnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face, const std::vector<int>& fitExpressions)
         : cascade_(std::move(cascade)), face_(std::move(face)) {
         const CnnModelData& d = cascade_->data();
         layout_ = makeWarpLayout(face_->data(), expressionIndices(face_->expressionNames(), d.expressions), d.patch_size);
+        for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
+            const int e = layout_.anchors.expressions[k];
+            const bool fitted = std::find(fitExpressions.begin(), fitExpressions.end(), e) != fitExpressions.end();
+            const bool read = d.reported.empty() || d.reported[k];
+            if (!d.expressions_only || (!fitted && read)) reported_.push_back(static_cast<int>(k));
+        }
         for (std::size_t i = 0; i < d.stages.size(); ++i) {
             nets_.emplace_back(d.stages[i].onnx, d.patch_size, 6 + static_cast<int>(d.expressions.size()),
                                "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1));
@@ -44,7 +50,8 @@ public:
             rounds += std::to_string(r);
         }
         return {"cnn", true,
-                std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
+                std::string(cascade_->expressionsOnly() ? "expressions only (" + std::to_string(reported_.size()) + " beside the fit's), " : "") +
+                    std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
                     std::to_string(layout_.anchors.expressions.size()) + " expressions" + (landmark_net_ ? ", landmark net" : "") + " (" +
                     cascade_->sourcePath() + ")"};
     }
@@ -56,7 +63,11 @@ public:
         return s;
     }
 
-    std::vector<int> estimatedExpressions() const override { return layout_.anchors.expressions; }
+    std::vector<int> estimatedExpressions() const override {
+        std::vector<int> out;
+        for (const int k : reported_) out.push_back(layout_.anchors.expressions[static_cast<std::size_t>(k)]);
+        return out;
+    }
 
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         auto& s = static_cast<CnnFaceState&>(*state);
@@ -75,10 +86,13 @@ public:
         for (std::size_t i = 0; i < nets_.size(); ++i) {
             if (!refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work)) return true;  // keep the fit's answer
         }
-        r.pose = fit::headPoseOf(s.params);
+        if (!cascade_->expressionsOnly()) r.pose = fit::headPoseOf(s.params);
         std::vector<float>& native = r.expression->native;
-        for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
-            native[static_cast<std::size_t>(layout_.anchors.expressions[k])] = static_cast<float>(s.params.expression[static_cast<Eigen::Index>(k)]);
+        const std::vector<float>& neutral = cascade_->data().neutral;
+        for (const int k : reported_) {
+            float w = static_cast<float>(s.params.expression[k]);
+            if (!neutral.empty()) w = std::clamp((w - neutral[static_cast<std::size_t>(k)]) / (1.f - neutral[static_cast<std::size_t>(k)]), 0.f, 1.f);
+            native[static_cast<std::size_t>(layout_.anchors.expressions[static_cast<std::size_t>(k)])] = w;
         }
         r.expression->arkit = face_->toArkit(native);
         if (landmark_net_) moveLandmarks(frame, face, s);
@@ -113,15 +127,16 @@ private:
     std::vector<PatchNet> nets_;
     fit::FitBasis landmark_basis_;
     std::optional<PatchNet> landmark_net_;
+    std::vector<int> reported_;  ///< the layout's expressions (positions in it) this stage writes
 };
 
 }  // namespace
 
 std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face,
-                                              bool haveFit) {
+                                              const pipeline::Stage* fit) {
     if (!cascade) return pipeline::notAvailable("cnn", "no CNN cascade (" + CnnModel::defaultPath() + " not found)");
-    if (!haveFit) return pipeline::notAvailable("cnn", "needs the fit stage's pose and expressions");
-    return std::make_unique<CnnStage>(std::move(cascade), std::move(face));
+    if (!fit || !fit->info().available) return pipeline::notAvailable("cnn", "needs the fit stage's pose and expressions");
+    return std::make_unique<CnnStage>(std::move(cascade), std::move(face), fit->estimatedExpressions());
 }
 
 }  // namespace facetrack::cnn

@@ -5,8 +5,9 @@
 // regresses the update (update_net.hpp) and applies it, `rounds` times.
 //
 // Reads: FaceResult::pose, expression, identity (the fit's). Writes: pose and
-// the cascade's expressions (the others stay as the fit left them). Never
-// loses a face: the fit's checks decide that.
+// the cascade's expressions (the others stay as the fit left them); a cascade
+// that reads only expressions (CnnModel::expressionsOnly) writes only those the
+// fit does not estimate. Never loses a face: the fit's checks decide that.
 
 #include "pipeline/stage.hpp"
 
@@ -17,8 +18,9 @@
 
 namespace facetrack::cnn {
 
-/// `cascade` null: the stage is not available; `haveFit` false also (it refines the fit).
+/// `cascade` null: the stage is not available; `fit` null or not available also (it refines the fit).
+/// `fit`'s estimated expressions are the ones an expressions-only cascade leaves alone.
 std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face,
-                                              bool haveFit);
+                                              const pipeline::Stage* fit);
 
 }  // namespace facetrack::cnn

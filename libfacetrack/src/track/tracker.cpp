@@ -67,7 +67,7 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
     pipeline::StageList stages;
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind(), config.landmark_starts));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}, models.landmarks != nullptr));
-    stages.push_back(cnn::makeCnnStage(models.cnn, models.face, models.landmarks != nullptr));
+    stages.push_back(cnn::makeCnnStage(models.cnn, models.face, stages.back().get()));
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
     // The gaze stage's eye shapes have their own temporal estimate: the filter leaves them as they are.
     const pipeline::Stage& gazeStage = *stages.back();
