@@ -27,7 +27,7 @@ public:
                 if (i + 1 >= argv.size()) throw Error("option " + a + " needs a value");
                 options_[a] = argv[++i];
             } else {
-                throw Error("unknown option '" + a + "'");
+                throw Error("unknown option '" + a + "'; " + known(valued, flags));
             }
         }
     }
@@ -64,6 +64,16 @@ public:
     }
 
 private:
+    /// What a mistyped option's error lists: "options with a value: --a, --b; flags: --help".
+    static std::string known(const std::set<std::string>& valued, const std::set<std::string>& flags) {
+        const auto list = [](const std::set<std::string>& names) {
+            std::string out;
+            for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+            return out.empty() ? std::string("none") : out;
+        };
+        return "options with a value: " + list(valued) + "; flags: " + list(flags);
+    }
+
     std::vector<std::string> positional_;
     std::map<std::string, std::string> options_;
 };

@@ -1,5 +1,7 @@
 #include "app/tracking_options.hpp"
 
+#include <filesystem>
+
 namespace facetrack::tools {
 
 DetectorConfig detectorConfig(const Args& args) {
@@ -10,6 +12,10 @@ DetectorConfig detectorConfig(const Args& args) {
     else if (kind == "cascade") config.kind = DetectorKind::Cascade;
     else throw Error("--detector must be auto, yunet or cascade, not '" + kind + "'");
     config.yunet_model = args.get("--yunet");
+    std::error_code ec;
+    if (!config.yunet_model.empty() && !std::filesystem::is_regular_file(config.yunet_model, ec)) {
+        throw Error("--yunet: no file '" + config.yunet_model + "'");
+    }
     config.min_score = static_cast<float>(args.number("--min-score", config.min_score));
     if (!(config.min_score >= 0.f && config.min_score <= 1.f)) throw Error("--min-score must be in [0, 1]");
     return config;
@@ -30,6 +36,7 @@ TrackerConfig trackerConfig(const Args& args) {
     if (!(config.filter.min_cutoff_hz > 0.0) || !(config.filter.beta >= 0.0)) {
         throw Error("--filter-cutoff must be positive and --filter-beta not negative");
     }
+    validate(config);
     return config;
 }
 

@@ -22,6 +22,8 @@ inline const std::set<std::string> kTrackerOptions = {"--max-faces", "--fov", "-
                                                       "--expression-prior", "--landmark-starts", "--filter-cutoff", "--filter-beta",
                                                       "--cnn", "--eyes"};
 inline const std::set<std::string> kTrackerFlags = {"--no-filter"};
+/// Every value is checked here (facetrack::validate): commands call it, and load their models,
+/// before they open any input, so that a bad option is the error, not the input.
 TrackerConfig trackerConfig(const Args& args);
 
 /// The shipped models (Models::loadDefault), the CNN cascade replaced by --cnn FILE, or left

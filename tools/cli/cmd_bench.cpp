@@ -32,8 +32,10 @@ int runBench(const std::vector<std::string>& argv) {
     }
     if (args.positional().size() != 1) throw Error("give one clip (see --help)");
     const std::string clip = args.positional()[0];
-    const auto frames = readAllFrames(clip, args.integer("--frames", -1), parseSize(args.get("--size")));
+    const int maxFrames = args.integer("--frames", -1);
+    const auto size = parseSize(args.get("--size"));
     Tracker tracker(trackingModels(args), trackerConfig(args));
+    const auto frames = readAllFrames(clip, maxFrames, size);
 
     std::vector<std::string> stageOrder;
     std::map<std::string, std::vector<double>> perStage;  // ms per frame, 0 when the stage did not run

@@ -19,8 +19,8 @@ int runDetect(const std::vector<std::string>& argv) {
         return 0;
     }
     if (args.positional().size() != 1) throw Error("detect needs one IMAGE, DIR or CLIP (see --help)");
-    auto reader = MediaReader::open(args.positional()[0]);
     auto detector = createFaceDetector(detectorConfig(args));
+    auto reader = MediaReader::open(args.positional()[0]);
     MediaFrame frame;
     while (reader.next(frame)) {
         Json faces = Json::array();

@@ -48,9 +48,9 @@ int runEvalDetect(const std::vector<std::string>& argv) {
     }
     if (args.positional().size() != 1) throw Error("eval-detect needs one DIR (see --help)");
     const std::string dir = args.positional()[0];
+    auto detector = createFaceDetector(detectorConfig(args));
     if (!fs::is_directory(dir)) throw Error("not a folder: '" + dir + "'");
 
-    auto detector = createFaceDetector(detectorConfig(args));
     std::map<std::string, Tally> subsets;
     Tally all;
     for (const auto& image : listImages(dir)) {

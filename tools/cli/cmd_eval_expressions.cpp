@@ -20,8 +20,11 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <filesystem>
 #include <map>
 #include <sstream>
+
+namespace fs = std::filesystem;
 
 namespace facetrack::cli {
 
@@ -268,6 +271,15 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     const TrackerConfig config = trackerConfig(args);
     const Models models = trackingModels(args);
     const std::string prefix = args.get("--plot", "expressions");
+    std::map<std::string, std::array<float, kArkitBlendshapeCount>> dense;
+    if (args.has("--dense")) dense = readDenseLabels(args.get("--dense"), *models.face);
+    // A clip is a name in ../shared/data/clips (as the labels name it) or a path to one.
+    std::map<std::string, std::string> paths;
+    for (auto& clip : clips) {
+        const fs::path given(clip);
+        paths[given.filename().string()] = given.has_parent_path() ? clip : shared + "/data/clips/" + clip;
+        clip = given.filename().string();
+    }
 
     // With --calibrate-neutral, each clip's first neutral segment's first frame calibrates, and is
     // left out of the neutral figure (the rest of the segment counts: a relaxed face stays relaxed).
@@ -280,8 +292,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     std::map<std::string, Track> tracks, mirrored;
     for (const auto& clip : clips) {
         const int at = calibrating.count(clip) ? calibrating[clip]->first : -1;
-        tracks[clip] = trackClip(shared + "/data/clips/" + clip, models, config, false, at);
-        if (!args.has("--no-mirror")) mirrored[clip] = trackClip(shared + "/data/clips/" + clip, models, config, true, at);
+        tracks[clip] = trackClip(paths[clip], models, config, false, at);
+        if (!args.has("--no-mirror")) mirrored[clip] = trackClip(paths[clip], models, config, true, at);
     }
     if (calibrate) std::printf("neutral calibrated at the first frame of each clip's first neutral segment (%zu clips)\n", calibrating.size());
     const auto neutralFigures = reportSegments(segments, tracks, calibrating);
@@ -329,9 +341,7 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     std::printf("yaw: neutral frames with |yaw| 0-10 / 10-20 / 20-30 deg: %ld / %ld / %ld; largest change of a shape's mean %.2f (%s)\n",
                 binFrames[0], binFrames[1], binFrames[2], drift, driftShape.c_str());
 
-    std::map<std::string, std::array<float, kArkitBlendshapeCount>> dense;
     if (args.has("--dense")) {
-        dense = readDenseLabels(args.get("--dense"), *models.face);
         std::array<std::vector<double>, kArkitBlendshapeCount> ours, theirs;
         for (const auto& clip : clips) {
             const Track& t = tracks[clip];

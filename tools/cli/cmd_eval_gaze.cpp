@@ -206,6 +206,10 @@ int runEvalGaze(const std::vector<std::string>& argv) {
     const TrackerConfig config = trackerConfig(args);
     const Models models = trackingModels(args);
     if (!models.eyes) throw Error("no eye model: " + EyeModel::defaultPath() + " not found (or --eyes none)");
+    const std::string split = args.get("--split", "validation");
+    if (split != "none") tools::parseSplit(split);  // checked before anything opens
+    const int synthetic = args.integer("--synthetic", 400);
+    if (synthetic < 0 || synthetic > 100000) throw Error("--synthetic must be in 0..100000");
 
     const auto clips = tools::splitList(args.get("--clips", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
     if (!clips.empty()) {
@@ -217,9 +221,7 @@ int runEvalGaze(const std::vector<std::string>& argv) {
                     "open frames read as closed %.2f %%\n",
                     mean(pupil), percentile(pupil, 0.95), mean(recall), 100.0 * mean(openClosed));
     }
-    const std::string split = args.get("--split", "validation");
     if (split != "none") eval300W(shared, tools::parseSplit(split), models, config);
-    const int synthetic = args.integer("--synthetic", 400);
     if (synthetic > 0) evalSyntheticGaze(synthetic, models, config, args.has("--bare-faces"));
     return 0;
 }

@@ -144,8 +144,8 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     if (args.positional().size() != 1) throw Error("eval-landmarks needs one DIR (see --help)");
     const std::string dir = args.positional()[0];
     const double maxError = args.number("--max-error", 0.08);
-    const auto faces = args.has("--split") ? tools::list300W(dir, tools::parseSplit(args.get("--split")))
-                                           : tools::listAnnotated(dir);
+    if (!(maxError > 0.0 && maxError <= 1.0)) throw Error("--max-error must be in (0, 1]");
+    if (args.has("--split")) tools::parseSplit(args.get("--split"));  // checked before anything opens
 
     std::vector<Method> methods;
     const auto lbf = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
@@ -169,6 +169,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     if (starts != 1) methods.push_back(ourLbf(lbf, 1));
     if (args.has("--facemark")) methods.push_back(facemarkLbf(args.get("--facemark")));
     const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
+    if (args.has("--dlib") && dlibPath != "none" && !fs::exists(dlibPath)) throw Error("no dlib model '" + dlibPath + "' (--dlib none skips dlib)");
     if (dlibPath != "none" && fs::exists(dlibPath)) {
         // dlib's model was trained on the 300-W training images; only the common test set is new to it.
         const bool seen = !args.has("--split") || args.get("--split") != "test";
@@ -179,6 +180,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     config.kind = DetectorKind::YuNet;
     config.yunet_model = args.get("--yunet");
     auto detector = createFaceDetector(config);
+    const auto faces = args.has("--split") ? tools::list300W(dir, tools::parseSplit(args.get("--split"))) : tools::listAnnotated(dir);
 
     int missed = 0;
     cv::Mat gray;

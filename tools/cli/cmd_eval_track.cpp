@@ -75,6 +75,8 @@ int runEvalTrack(const std::vector<std::string>& argv) {
     if (args.positional().empty()) throw Error("give at least one clip (see --help)");
     const TrackerConfig config = trackerConfig(args);
     const auto models = trackingModels(args);
+    const int maxFrames = args.integer("--frames", -1);
+    const auto size = parseSize(args.get("--size"));
     const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
     std::optional<dlib::shape_predictor> predictor;
     if (dlibPath != "none") {
@@ -86,7 +88,7 @@ int runEvalTrack(const std::vector<std::string>& argv) {
 
     std::printf("  %-26s %9s %9s %10s\n", "method", "face", "fps", "jitter");
     for (const auto& clip : args.positional()) {
-        const auto frames = readAllFrames(clip, args.integer("--frames", -1), parseSize(args.get("--size")));
+        const auto frames = readAllFrames(clip, maxFrames, size);
         std::printf("%s (%zu frames, %dx%d)\n", clip.c_str(), frames.size(), frames[0].bgr.cols, frames[0].bgr.rows);
 
         Tracker tracker(models, config);

@@ -57,11 +57,11 @@ int runLandmarks(const std::vector<std::string>& argv) {
     }
     if (args.positional().size() != 1) throw Error("landmarks needs one IMAGE, DIR or CLIP (see --help)");
     const std::optional<Box> givenBox = args.has("--box") ? std::optional(parseBox(args.get("--box"))) : std::nullopt;
-    auto reader = MediaReader::open(args.positional()[0]);
     const auto model = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
     std::unique_ptr<FaceDetector> detector;
     if (!givenBox) detector = createFaceDetector(detectorConfig(args));
     StillLandmarks still(model, args.get("--cascade", ""), args.has("--lbf-only"), detector ? detector->kind() : "yunet");
+    auto reader = MediaReader::open(args.positional()[0]);
 
     MediaFrame frame;
     cv::Mat gray;

@@ -46,9 +46,8 @@ double cpuSeconds() {
            1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
-std::unique_ptr<FrameSource> openSource(const Args& args) {
-    if (args.has("--camera") == args.has("--input")) throw Error("give --camera DEVICE or --input CLIP (see --help)");
-    if (args.has("--input")) return openMediaSource(args.get("--input"));
+/// --camera DEVICE [--size WxH] [--fps F], checked before anything opens.
+CaptureSettings cameraSettings(const Args& args) {
     CaptureSettings settings;
     settings.device = args.get("--camera");
     if (args.has("--size")) {
@@ -57,7 +56,13 @@ std::unique_ptr<FrameSource> openSource(const Args& args) {
         settings.height = size.height;
     }
     settings.fps = args.number("--fps", settings.fps);
-    return openCameraSource(settings);
+    if (!(settings.fps > 0.0 && settings.fps <= 1000.0)) throw Error("--fps must be in (0, 1000]");
+    return settings;
+}
+
+std::unique_ptr<FrameSource> openSource(const Args& args, const CaptureSettings& camera) {
+    if (args.has("--input")) return openMediaSource(args.get("--input"));
+    return openCameraSource(camera);
 }
 
 }  // namespace
@@ -75,14 +80,17 @@ int runSend(const std::vector<std::string>& argv) {
     const long maxFrames = static_cast<long>(args.integer("--frames", -1));
     std::optional<int> listenPort;
     if (args.has("--listen-port")) listenPort = args.integer("--listen-port", 0);
+    if (args.has("--camera") == args.has("--input")) throw Error("give --camera DEVICE or --input CLIP (see --help)");
+    const CaptureSettings camera = cameraSettings(args);
+    const TrackerConfig config = trackerConfig(args);
 
     Models models = trackingModels(args);
     send::Sender sender(protocol, args.get("--to", "127.0.0.1"), models.face, listenPort);
     AsyncOptions options;
     options.realtime = !args.has("--fast");
-    auto source = openSource(args);
+    auto source = openSource(args, camera);
     const std::string sourceName = source->describe();
-    AsyncTracker tracking(std::move(models), trackerConfig(args), std::move(source), options);
+    AsyncTracker tracking(std::move(models), config, std::move(source), options);
     std::fprintf(stderr, "facetrack send: %s from %s to %s (Ctrl+C stops)\n", send::protocolName(protocol), sourceName.c_str(),
                  sender.destination().c_str());
 

@@ -148,15 +148,16 @@ int runTrack(const std::vector<std::string>& argv) {
         std::puts(kUsage);
         return 0;
     }
-    const double maxFrames = args.number("--frames", -1);
+    const int maxFrames = args.integer("--frames", -1);
     // --neutral-at S: Tracker::calibrateNeutral() after the first frame at or past S seconds.
     const double neutralAt = args.number("--neutral-at", -1.0);
-    const TrackerConfig config = trackerConfig(args);
+    if (args.has("--neutral-at") && !(neutralAt >= 0.0 && neutralAt < 1e9)) throw Error("--neutral-at must be seconds, 0 or more");
     const bool raw = args.has("--raw");
+    const TrackerConfig config = trackerConfig(args);
+    Tracker tracker(trackingModels(args), config);
 
     std::string inputName;
     auto reader = openInput(args, inputName);
-    Tracker tracker(trackingModels(args), config);
     std::cerr << "facetrack: tracking " << inputName << '\n';
 
     std::ofstream file;

@@ -2,6 +2,8 @@
 
 #include "commands.hpp"
 
+#include <opencv2/core/utils/logger.hpp>
+
 #include <cstdio>
 #include <cstring>
 #include <functional>
@@ -46,6 +48,10 @@ int main(int argc, char** argv) {
         std::fputs(kUsage, argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
     }
+    // Our errors say what went wrong in one line; OpenCV's video backends would add their own
+    // warnings and errors before it (GStreamer's for every file it cannot open, the image-sequence
+    // backend's for any name without a number).
+    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
     const auto command = commands.find(argv[1]);
     if (command == commands.end()) {
         std::fprintf(stderr, "facetrack: unknown command '%s' (try 'facetrack --help')\n", argv[1]);

@@ -94,6 +94,10 @@ struct TrackerConfig {
     int landmark_starts = 5;
 };
 
+/// Throws Error naming the first field of `config` out of range, as the Tracker's
+/// constructor does: settings can be checked before anything is loaded or opened.
+void validate(const TrackerConfig& config);
+
 /// One Tracker follows the faces of one video stream. It is not thread-safe:
 /// use one per stream (or thread) and share the immutable models between them.
 class Tracker {

@@ -40,10 +40,7 @@ Models Models::loadDefault() {
     return models;
 }
 
-namespace {
-
-void validate(const Models& models, const TrackerConfig& config) {
-    if (!models.face) throw Error("Tracker: no face model given");
+void validate(const TrackerConfig& config) {
     if (config.max_faces < 1) throw Error("TrackerConfig::max_faces must be at least 1");
     if (config.detect_interval < 1) throw Error("TrackerConfig::detect_interval must be at least 1");
     if (config.verify_interval < 0 || config.calibration_frames < 0) {
@@ -60,6 +57,13 @@ void validate(const Models& models, const TrackerConfig& config) {
     }
     const CameraConfig& c = config.camera;
     fit::cameraFor(640, 480, c.horizontal_fov_deg, c.focal_length_px, c.principal_x_px, c.principal_y_px);  // validates
+}
+
+namespace {
+
+void validate(const Models& models, const TrackerConfig& config) {
+    if (!models.face) throw Error("Tracker: no face model given");
+    validate(config);
 }
 
 /// The stage list: the order of execution, of stages() and of the timings.
