@@ -277,7 +277,7 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     std::map<std::string, std::string> paths;
     for (auto& clip : clips) {
         const fs::path given(clip);
-        paths[given.filename().string()] = given.has_parent_path() ? clip : shared + "/data/clips/" + clip;
+        paths[given.filename().string()] = clipPath(shared, clip);
         clip = given.filename().string();
     }
 

@@ -61,7 +61,7 @@ struct ClipFrame {
 void evalClip(const std::string& shared, const std::string& clip, const std::map<std::string, tools::TeacherRecord>& teacher,
               const Models& models, const TrackerConfig& config, std::vector<double>& pupilErrors, std::vector<double>& eventsFound,
               std::vector<double>& openAsClosed) {
-    cv::VideoCapture video(shared + "/data/clips/" + clip);
+    cv::VideoCapture video(clipPath(shared, clip));
     if (!video.isOpened()) throw Error("cannot open clip " + clip);
     Tracker tracker(models, config);
     std::vector<ClipFrame> frames;
@@ -70,7 +70,7 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
     for (int f = 0; video.read(bgr); ++f) {
         tracker.process(tools::viewOf(bgr), f / 30.0, result);
         ClipFrame cf;
-        const auto t = teacher.find(tools::teacherKey(clip, f));
+        const auto t = teacher.find(tools::teacherKey(std::filesystem::path(clip).filename().string(), f));
         if (t != teacher.end()) cf.teacher = t->second;
         if (!result.faces.empty()) cf.face = result.faces[0];
         frames.push_back(std::move(cf));

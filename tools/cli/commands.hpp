@@ -10,6 +10,8 @@
 #include "facetrack/detector.hpp"
 #include "facetrack/tracker.hpp"
 
+#include <filesystem>
+
 namespace facetrack::cli {
 
 int runInfo(const std::vector<std::string>& argv);
@@ -23,6 +25,16 @@ int runEvalTrack(const std::vector<std::string>& argv);
 int runSend(const std::vector<std::string>& argv);
 int runEvalGaze(const std::vector<std::string>& argv);
 int runEvalExpressions(const std::vector<std::string>& argv);
+
+/// A clip by the name ../shared/data/clips (`shared`) gives it, as labels and teacher files name
+/// clips, or by its path. Error when no such file exists, before any video backend is asked (they
+/// try every plugin on a missing file, and some leak doing it).
+inline std::string clipPath(const std::string& shared, const std::string& clip) {
+    const std::string path = std::filesystem::path(clip).has_parent_path() ? clip : shared + "/data/clips/" + clip;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw Error("no such clip: '" + path + "'");
+    return path;
+}
 
 // The tools' shared pieces, by their short names.
 using tools::Args;
