@@ -230,15 +230,11 @@ TEST(ShippedLandmarkModel, StaysAccurateOnHeldOutFaces) {
     DetectorConfig config;
     config.kind = DetectorKind::YuNet;
     auto detector = createFaceDetector(config);
-    const std::string dir = test::sharedDir() + "/data/faces300w/lfpw/testset";
     double sum = 0, sumStarts = 0;
     int count = 0;
-    for (int k = 1; k <= 40; ++k) {
-        char stem[32];
-        std::snprintf(stem, sizeof stem, "/image_%04d", k);
-        if (!fs::exists(dir + stem + ".jpg")) continue;
-        const cv::Mat bgr = cv::imread(dir + stem + ".jpg");
-        const core::Shape2 truth = core::readPts(dir + stem + ".pts");
+    for (const auto& [number, stem] : test::lfpwTestFaces(40)) {
+        const cv::Mat bgr = cv::imread(stem + ".jpg");
+        const core::Shape2 truth = core::readPts(stem + ".pts");
         const auto found = detector->detect(core::viewOf(bgr));
         ASSERT_FALSE(found.empty()) << stem;
         cv::Mat gray;
@@ -265,20 +261,16 @@ TEST(ShippedLandmarkModel, AveragedStartsJitterLessUnderPixelNoise) {
     const std::string path = test::sourceDir() + "/models/landmarks_lbf.ftm";
     if (!fs::exists(path)) GTEST_SKIP() << "models/landmarks_lbf.ftm is not shipped";
     const auto model = LandmarkModel::load(path);
-    const std::string dir = test::sharedDir() + "/data/faces300w/lfpw/testset";
     std::array<double, 2> spread{};  // one start, the tracker's starts: RMS deviation from the mean answer
     int faces = 0;
-    for (int k = 1; k <= 8; ++k) {
-        char stem[32];
-        std::snprintf(stem, sizeof stem, "/image_%04d", k);
-        if (!fs::exists(dir + stem + ".jpg")) continue;
-        cv::Mat gray = cv::imread(dir + stem + ".jpg", cv::IMREAD_GRAYSCALE);
-        const core::Shape2 truth = core::readPts(dir + stem + ".pts");
+    for (const auto& [number, stem] : test::lfpwTestFaces(8)) {
+        cv::Mat gray = cv::imread(stem + ".jpg", cv::IMREAD_GRAYSCALE);
+        const core::Shape2 truth = core::readPts(stem + ".pts");
         const Shape68 start = alignLandmarks(model->data(), gray, Shape68(truth));
         const float eyes = (truth.col(36) - truth.col(45)).norm();
         for (const int n : {1, kTrackerStarts}) {
             std::vector<Shape68> answers;
-            cv::RNG noiseRng(static_cast<std::uint64_t>(k));  // the same noise for both counts
+            cv::RNG noiseRng(static_cast<std::uint64_t>(number));  // the same noise for both counts
             for (int trial = 0; trial < 12; ++trial) {
                 cv::Mat noise(gray.size(), CV_32F), noisy;
                 noiseRng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);

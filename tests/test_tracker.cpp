@@ -225,16 +225,12 @@ TEST(Tracker, FollowingAStillFaceKeepsItsLandmarkAccuracy) {
     DetectorConfig yunet;
     yunet.kind = DetectorKind::YuNet;
     auto detector = createFaceDetector(yunet);
-    const std::string dir = test::sharedDir() + "/data/faces300w/lfpw/testset";
     double found = 0, followed = 0;
     int faces = 0;
     FrameResult result;
-    for (int k = 1; k <= 40; ++k) {
-        char stem[32];
-        std::snprintf(stem, sizeof stem, "/image_%04d", k);
-        if (!std::filesystem::exists(dir + stem + ".jpg")) continue;
-        const cv::Mat bgr = cv::imread(dir + stem + ".jpg");
-        const core::Shape2 truth = core::readPts(dir + stem + ".pts");
+    for (const auto& [number, stem] : test::lfpwTestFaces(40)) {
+        const cv::Mat bgr = cv::imread(stem + ".jpg");
+        const core::Shape2 truth = core::readPts(stem + ".pts");
         const auto boxes = detector->detect(core::viewOf(bgr));
         ASSERT_FALSE(boxes.empty()) << stem;
         tracker.reset();
