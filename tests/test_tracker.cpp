@@ -249,6 +249,67 @@ TEST(Tracker, FollowingAStillFaceKeepsItsLandmarkAccuracy) {
     EXPECT_LT(followed, 1.05 * found);
 }
 
+// A face that jumps between two frames (a fast head move, a dropped frame) is
+// found where it went. Synthetic ground truth: the same photograph placed
+// further along a larger canvas, so the annotation moves by exactly the shift.
+// From the previous frame's place the landmarks can slide onto the side of the
+// face, or stay behind; what they then follow does not look like the face of
+// the previous frame, the detector is asked, and the face restarts from the
+// detection in the same frame.
+TEST(Tracker, AFaceThatJumpsIsFoundWhereItWent) {
+    FACETRACK_REQUIRE_PIPELINE();
+    const Models shipped = Models::loadDefault();
+    const auto run = [&](int verifyInterval) -> std::pair<double, double> {
+        TrackerConfig config;
+        config.filter.enabled = false;
+        config.verify_interval = verifyInterval;
+        Tracker tracker(Models{shipped.face, shipped.landmarks, nullptr, nullptr}, config);
+        double before = 0, after = 0;
+        int faces = 0;
+        FrameResult result;
+        for (const auto& [number, stem] : test::lfpwTestFaces(30)) {
+            const cv::Mat photo = cv::imread(stem + ".jpg");
+            const core::Shape2 truth = core::readPts(stem + ".pts");
+            const float width = static_cast<float>(truth.row(0).maxCoeff() - truth.row(0).minCoeff());
+            const int jump = cvRound(0.6f * width);  // across, in one frame
+            cv::Mat canvas(photo.rows + 40, photo.cols + jump + 40, CV_8UC3, cv::Scalar(128, 128, 128));
+            const auto frameAt = [&](int x) {
+                canvas.setTo(cv::Scalar(128, 128, 128));
+                photo.copyTo(canvas(cv::Rect(x, 20, photo.cols, photo.rows)));
+                return canvas.clone();
+            };
+            const auto nmeAt = [&](int x) {
+                core::Shape2 moved = truth;
+                moved.row(0).array() += x;
+                moved.row(1).array() += 20;
+                return core::nme68(core::Shape2(landmarks::fromLandmarks68(*result.faces[0].landmarks)), moved);
+            };
+            tracker.reset();
+            const cv::Mat still = frameAt(20), jumped = frameAt(20 + jump);
+            for (int frame = 0; frame < 4; ++frame) tracker.process(core::viewOf(still), frame / 30.0, result);
+            if (result.faces.size() != 1) continue;  // the detector missed the photograph: no test of following
+            const double found = nmeAt(20);
+            tracker.process(core::viewOf(jumped), 4 / 30.0, result);
+            if (result.faces.size() != 1) {
+                ADD_FAILURE() << stem << ": the face was lost after the jump";
+                continue;
+            }
+            before += found;
+            after += nmeAt(20 + jump);
+            ++faces;
+        }
+        EXPECT_GE(faces, 20);
+        return std::pair{before / faces, after / faces};
+    };
+    const auto [found, jumped] = run(TrackerConfig{}.verify_interval);
+    const auto [unchecked, unfollowed] = run(0);  // no verification: nothing restarts the face
+    std::printf("mean NME before / in the frame after jumping 0.6 face widths: %.2f / %.2f %% (without verification %.2f %%)\n",
+                100 * found, 100 * jumped, 100 * unfollowed);
+    EXPECT_LT(jumped, 1.5 * found);
+    EXPECT_GT(unfollowed, 2.0 * jumped);  // the jump is one the landmarks alone do not follow
+    (void)unchecked;
+}
+
 // Four trackers on four threads, one shared set of models, the whole pipeline:
 // each gives exactly what one tracker gives alone (no state shared by accident,
 // e.g. the stages' per-thread scratch buffers).

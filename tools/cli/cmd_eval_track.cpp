@@ -2,6 +2,9 @@
 #include "app/media.hpp"
 
 #include "app/image_view.hpp"
+#include "common/teacher.hpp"
+#include "core/environment.hpp"
+#include "dense/mediapipe_mesh.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <dlib/image_processing.h>
@@ -14,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 
 namespace facetrack::cli {
@@ -27,9 +31,72 @@ same run's raw landmarks), and dlib (HOG detector + 68-point shape_predictor on 
 Jitter: RMS over frames and points of the landmarks' second difference in time,
 |x(t+1) - 2 x(t) + x(t-1)|, over the outer-eye-corner distance, on frames whose neighbours
 have a face too. It counts real motion as well, so compare methods on the same clip.
+Teacher (clips of ../shared, whose frames MediaPipe's face mesh labelled: another model's
+predictions, not ground truth): at eight points both place alike (eye corners, nose tip,
+mouth corners, chin), the mean distance over the teacher's outer-eye-corner distance on
+frames where both have a face, and "off": the share of the teacher's frames where the
+method has no face or is more than kOff away (following the wrong thing, or lost).
 Run on one core for fair fps: taskset -c 0 facetrack eval-track ...)";
 
 using Track = std::vector<std::optional<Landmarks68>>;
+
+/// iBUG landmark -> MediaPipe mesh vertex, at points the two conventions place alike.
+constexpr std::array<std::pair<int, int>, 8> kTeacherPoints = {
+    {{36, 33}, {39, 133}, {42, 362}, {45, 263}, {30, 1}, {48, 61}, {54, 291}, {8, 152}}};
+constexpr double kOff = 0.3;  // outer-eye-corner distances: a face this far off is not followed
+
+/// The teacher's eight points per frame of one clip (empty where it found no face).
+using TeacherTrack = std::vector<std::optional<std::array<Point2, kTeacherPoints.size()>>>;
+
+TeacherTrack teacherTrack(const dense::TeacherMeshes& meshes, const std::string& clip, std::size_t frames) {
+    std::map<std::string, int> rowOf;
+    for (int r = 0; r < meshes.rows(); ++r) rowOf.emplace(meshes.keys[r], r);
+    TeacherTrack out(frames);
+    for (std::size_t f = 0; f < frames; ++f) {
+        const auto row = rowOf.find(tools::teacherKey(clip, static_cast<int>(f)));
+        if (row == rowOf.end() || !meshes.found[row->second]) continue;
+        const Eigen::Matrix2Xd mesh = meshes.points(row->second);
+        auto& points = out[f].emplace();
+        for (std::size_t i = 0; i < kTeacherPoints.size(); ++i) {
+            const int v = kTeacherPoints[i].second;
+            points[i] = {static_cast<float>(mesh(0, v)), static_cast<float>(mesh(1, v))};
+        }
+    }
+    return out;
+}
+
+struct Agreement {
+    double mean_error = std::nan("");  ///< outer-eye-corner distances
+    double off = std::nan("");         ///< share of the teacher's frames
+};
+
+Agreement agreement(const Track& track, const TeacherTrack& teacher) {
+    double sum = 0.0;
+    long both = 0, labelled = 0, off = 0;
+    for (std::size_t f = 0; f < track.size() && f < teacher.size(); ++f) {
+        if (!teacher[f]) continue;
+        ++labelled;
+        if (!track[f]) {
+            ++off;
+            continue;
+        }
+        const auto& t = *teacher[f];
+        const double eyes = std::hypot(t[0].x - t[3].x, t[0].y - t[3].y);
+        double error = 0.0;
+        for (std::size_t i = 0; i < kTeacherPoints.size(); ++i) {
+            const Point2 p = (*track[f])[kTeacherPoints[i].first];
+            error += std::hypot(p.x - t[i].x, p.y - t[i].y);
+        }
+        error /= static_cast<double>(kTeacherPoints.size()) * std::max(eyes, 1.0);
+        sum += error;
+        ++both;
+        off += error > kOff;
+    }
+    Agreement a;
+    if (both) a.mean_error = sum / static_cast<double>(both);
+    if (labelled) a.off = static_cast<double>(off) / static_cast<double>(labelled);
+    return a;
+}
 
 struct MethodResult {
     Track landmarks;
@@ -59,9 +126,10 @@ double share(const Track& track) {
     return track.empty() ? 0.0 : static_cast<double>(n) / static_cast<double>(track.size());
 }
 
-void printRow(const char* method, const Track& track, double seconds) {
-    std::printf("  %-26s %7.1f %% %9.1f %10.4f\n", method, 100.0 * share(track),
-                seconds > 0 ? static_cast<double>(track.size()) / seconds : 0.0, jitter(track));
+void printRow(const char* method, const Track& track, double seconds, const TeacherTrack& teacher) {
+    const Agreement a = agreement(track, teacher);
+    std::printf("  %-26s %7.1f %% %9.1f %10.4f %10.4f %7.1f %%\n", method, 100.0 * share(track),
+                seconds > 0 ? static_cast<double>(track.size()) / seconds : 0.0, jitter(track), a.mean_error, 100.0 * a.off);
 }
 
 }  // namespace
@@ -86,9 +154,21 @@ int runEvalTrack(const std::vector<std::string>& argv) {
     }
     dlib::frontal_face_detector hog = dlib::get_frontal_face_detector();
 
-    std::printf("  %-26s %9s %9s %10s\n", "method", "face", "fps", "jitter");
+    const std::string shared = core::sharedDirectory();
+    const std::string teacherDir = shared + "/data/teacher";
+    std::optional<dense::TeacherMeshes> meshes;
+    if (!shared.empty() && std::filesystem::exists(teacherDir + "/clips_mesh.npy")) {
+        meshes = dense::readTeacherMeshes(teacherDir + "/clips_iris.jsonl", teacherDir + "/clips_mesh.npy");
+    } else {
+        std::puts("(no ../shared/data/teacher: the teacher columns are left empty)");
+    }
+
+    std::printf("  %-26s %9s %9s %10s %10s %9s\n", "method", "face", "fps", "jitter", "vs teacher", "off");
     for (const auto& clip : args.positional()) {
         const auto frames = readAllFrames(clip, maxFrames, size);
+        // --size letterboxes: the teacher saw the clip's own frames.
+        const TeacherTrack teacher = meshes && size.empty() ? teacherTrack(*meshes, std::filesystem::path(clip).filename().string(), frames.size())
+                                                     : TeacherTrack{};
         std::printf("%s (%zu frames, %dx%d)\n", clip.c_str(), frames.size(), frames[0].bgr.cols, frames[0].bgr.rows);
 
         Tracker tracker(models, config);
@@ -102,8 +182,8 @@ int runEvalTrack(const std::vector<std::string>& argv) {
             filtered.push_back(face ? r.faces[0].landmarks : std::nullopt);
             raw.push_back(face ? r.faces[0].raw.landmarks : std::nullopt);
         }
-        printRow(config.filter.enabled ? "facetrack (filtered)" : "facetrack (no filter)", filtered, seconds);
-        if (config.filter.enabled) printRow("facetrack (raw, same run)", raw, seconds);
+        printRow(config.filter.enabled ? "facetrack (filtered)" : "facetrack (no filter)", filtered, seconds, teacher);
+        if (config.filter.enabled) printRow("facetrack (raw, same run)", raw, seconds, teacher);
 
         if (predictor) {
             Track dlibTrack;
@@ -126,7 +206,7 @@ int runEvalTrack(const std::vector<std::string>& argv) {
                 dlibSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
                 dlibTrack.push_back(points);
             }
-            printRow("dlib HOG + shape_predictor", dlibTrack, dlibSeconds);
+            printRow("dlib HOG + shape_predictor", dlibTrack, dlibSeconds, teacher);
         }
     }
     return 0;

@@ -75,8 +75,12 @@ struct TrackerConfig {
     /// are followed (every frame while none is).
     int detect_interval = 15;
     /// Confirm a followed face with the detector, on a small crop around it,
-    /// every this many frames (0: never). Catches a tracker that sticks to
-    /// background after the face left.
+    /// every this many frames, and in any frame where what is followed stops
+    /// looking like the face of the frame before or the fit doubts it (a
+    /// sudden turn, a poor fit). No detection: the face is dropped (on the
+    /// periodic check). A detection elsewhere: the face restarts from it, same
+    /// id. Catches a tracker that sticks to background after the face left,
+    /// or to the side of a head that moved fast. 0: never.
     int verify_interval = 30;
     /// A fit residual above this (eye-corner distances) drops the face and re-detects.
     float max_fit_residual = 0.12f;

@@ -40,6 +40,12 @@ public:
 
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         auto& s = static_cast<FilterFaceState&>(*state);
+        if (face.fresh) {  // found (again): what the filters hold may be another place
+            s.landmarks.reset();
+            s.rotation.reset();
+            s.translation.reset();
+            s.expression.reset();
+        }
         FaceResult& r = face.result;
         r.raw.landmarks = r.landmarks;
         r.raw.pose = r.pose;

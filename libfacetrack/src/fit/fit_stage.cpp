@@ -1,5 +1,6 @@
 #include "fit/fit_stage.hpp"
 
+#include "core/math.hpp"
 #include "fit/face_fitter.hpp"
 
 #include <algorithm>
@@ -13,6 +14,13 @@ namespace {
 constexpr double kMaxPitchDeg = 70.0, kMaxYawDeg = 80.0;
 constexpr double kMinDepthCm = 10.0, kMaxDepthCm = 1000.0;
 constexpr int kCalibrationStride = 5;  // frames between identity calibration samples
+// A head turning this much between two frames (300 deg/s at 30 fps) is more
+// likely a fit that slid off the face: on the clips, followed faces turn at
+// most ~6 deg a frame.
+constexpr double kDoubtfulTurnDeg = 10.0;
+// A fit this close to losing the face is checked too (d12, glasses and fast
+// moves: residual median 0.4, p95 0.6 of max_residual; other clips below 0.5).
+constexpr double kDoubtfulResidualShare = 0.75;
 
 struct FitFaceState final : pipeline::StageState {
     FitFaceState(const std::shared_ptr<const FitBasis>& basis, const FitSettings& fitSettings, int calibrationFrames)
@@ -55,7 +63,10 @@ public:
         if (!face.result.landmarks) return false;
         Landmarks2d observed;
         for (int i = 0; i < model::kLandmarkCount; ++i) observed.col(i) << (*face.result.landmarks)[i].x, (*face.result.landmarks)[i].y;
-        const FitReport report = s.fitter.fit(frame.camera, observed, s.params, s.fitted);
+        // A face found again (fresh) starts cold: the previous pose may be the one that slid off it.
+        const bool warm = s.fitted && !face.fresh;
+        const Eigen::Matrix3d before = rotationOf(s.params.omega());
+        const FitReport report = s.fitter.fit(frame.camera, observed, s.params, warm);
         s.fitted = true;
         const Eigen::Vector3d euler = eulerDegrees(s.params.omega());
         const double depth = s.params.translation().z();
@@ -63,6 +74,8 @@ public:
             std::abs(euler.y()) > kMaxYawDeg || !(depth >= kMinDepthCm && depth <= kMaxDepthCm)) {
             return false;
         }
+        const double turnDeg = Eigen::AngleAxisd(rotationOf(s.params.omega()) * before.transpose()).angle() / core::kRadiansPerDegree;
+        face.doubtful = report.residual > kDoubtfulResidualShare * settings_.max_residual || (warm && turnDeg > kDoubtfulTurnDeg);
         sampleForCalibration(frame, face, s, observed, report);
         writeResult(face, s, report);
         return true;

@@ -8,7 +8,10 @@
 // confidence, identity, identity_calibrated, and FaceTrack::next_start (the
 // fitted face's projection, where the next frame's landmark search starts).
 // Loses the face when the residual exceeds max_residual, |pitch| > 70 deg,
-// |yaw| > 80 deg, or the depth leaves [10 cm, 10 m].
+// |yaw| > 80 deg, or the depth leaves [10 cm, 10 m]. Doubts it (FaceTrack::
+// doubtful) when the residual exceeds 3/4 of max_residual or the head turned
+// more than kDoubtfulTurnDeg since the previous frame: what a fit that slid
+// off a fast-moving face onto its side looks like.
 
 #include "pipeline/stage.hpp"
 

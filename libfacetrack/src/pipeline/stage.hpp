@@ -46,6 +46,13 @@ struct FaceTrack {
     Box box;                ///< detector box while fresh, then wherever a stage locates the face
     bool located = false;   ///< a stage (or the detector) placed the face in this frame
     bool lost = false;      ///< a stage or the verification lost it this frame: dropped
+    /// A stage doubts, this frame, that it still follows the face (a jump, a
+    /// poor fit): the Tracker checks it with the detector in this very frame.
+    bool doubtful = false;
+    /// The face's box in the last frame, small and standardised (the Tracker's
+    /// check that what it follows still looks like what it followed).
+    /// Empty when the last frame gave none.
+    std::vector<float> appearance;
 
     // Between stages.
     /// Stages write their fields here; it lives as long as the face, so its

@@ -17,6 +17,66 @@ namespace {
 
 constexpr int kVerifyCropWidth = 128;  // px: the verification crop is detected at this width
 constexpr float kSameFaceIou = 0.3f;   // a detection overlapping a followed face this much is that face
+// A followed face agrees with a detection when the detection's centre lies in
+// the middle of the face's box: within a quarter of its width of its centre
+// across, 0.4 of its height up or down. On the clips, well-followed faces put
+// YuNet's centre within 0.05 widths across and 0.08-0.27 heights up (its box
+// takes in the forehead); a fit that slid onto the side of a fast-turning head
+// put it 0.27-0.50 widths across.
+constexpr float kAgreeAcross = 0.25f, kAgreeUpDown = 0.4f;
+
+// What the stages followed is checked against what they followed a frame ago:
+// the face's box, 16 px square, standardised; correlation below kAlike is
+// doubtful. On the clips well-followed faces give >= 0.83 (p1 0.87-0.98 per
+// clip); a landmark search that stayed behind a fast-moving face, 0.39.
+constexpr int kAppearanceSide = 16;
+constexpr double kAlike = 0.7;
+
+/// The face's box in `gray` as kAppearanceSide x kAppearanceSide cell means
+/// (up to 4 x 4 samples a cell), zero mean and unit RMS, into `out` (no
+/// allocation once it has the size). False when the box leaves the frame or
+/// is flat.
+bool appearanceOf(const cv::Mat& gray, const Box& box, std::vector<float>& out) {
+    const cv::Rect region = cv::Rect(cvFloor(box.x0), cvFloor(box.y0), cvCeil(box.width()), cvCeil(box.height())) &
+                            cv::Rect(0, 0, gray.cols, gray.rows);
+    if (region.width < kAppearanceSide || region.height < kAppearanceSide) return false;
+    out.resize(kAppearanceSide * kAppearanceSide);
+    const double cellW = static_cast<double>(region.width) / kAppearanceSide, cellH = static_cast<double>(region.height) / kAppearanceSide;
+    const int stepX = std::max(1, static_cast<int>(cellW / 4)), stepY = std::max(1, static_cast<int>(cellH / 4));
+    double sum = 0.0, squares = 0.0;
+    for (int cy = 0; cy < kAppearanceSide; ++cy) {
+        const int y0 = region.y + static_cast<int>(cy * cellH), y1 = region.y + static_cast<int>((cy + 1) * cellH);
+        for (int cx = 0; cx < kAppearanceSide; ++cx) {
+            const int x0 = region.x + static_cast<int>(cx * cellW), x1 = region.x + static_cast<int>((cx + 1) * cellW);
+            int total = 0, count = 0;
+            for (int y = y0; y < y1; y += stepY) {
+                const std::uint8_t* row = gray.ptr<std::uint8_t>(y);
+                for (int x = x0; x < x1; x += stepX, ++count) total += row[x];
+            }
+            const double mean = static_cast<double>(total) / std::max(count, 1);
+            out[cy * kAppearanceSide + cx] = static_cast<float>(mean);
+            sum += mean;
+            squares += mean * mean;
+        }
+    }
+    const double n = static_cast<double>(out.size()), mean = sum / n, deviation = std::sqrt(std::max(0.0, squares / n - mean * mean));
+    if (!(deviation > 1.0)) return false;
+    for (float& v : out) v = static_cast<float>((v - mean) / deviation);
+    return true;
+}
+
+/// Normalised cross-correlation of two appearances: 1 alike, 0 unrelated.
+double alike(const std::vector<float>& a, const std::vector<float>& b) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) sum += static_cast<double>(a[i]) * b[i];
+    return sum / static_cast<double>(a.size());
+}
+
+bool agrees(const Box& followed, const Box& detection) {
+    const float dx = 0.5f * (detection.x0 + detection.x1 - followed.x0 - followed.x1);
+    const float dy = 0.5f * (detection.y0 + detection.y1 - followed.y0 - followed.y1);
+    return std::abs(dx) <= kAgreeAcross * followed.width() && std::abs(dy) <= kAgreeUpDown * followed.height();
+}
 
 }  // namespace
 
@@ -53,7 +113,7 @@ std::vector<StageInfo> TrackerCore::stages() const {
     out.push_back(settings_.verify_interval > 0
                       ? StageInfo{"verify", true,
                                   "the detector on a crop around each followed face, every " +
-                                      std::to_string(settings_.verify_interval) + " frames"}
+                                      std::to_string(settings_.verify_interval) + " frames and when a stage doubts it"}
                       : StageInfo{"verify", false, "off (TrackerConfig::verify_interval is 0)"});
     for (const auto& stage : stages_) out.push_back(stage->info());
     return out;
@@ -84,21 +144,48 @@ void TrackerCore::detect(const ImageView& frame) {
     time(kDetect, start);
 }
 
-bool TrackerCore::verify(const pipeline::FaceTrack& face) {
+std::optional<Box> TrackerCore::findAgain(const pipeline::FaceTrack& face) {
     // A crop twice the face's size, detected small: ~1 ms instead of a full-frame search.
     const float side = 2.f * std::max(face.box.width(), face.box.height());
     const float cx = 0.5f * (face.box.x0 + face.box.x1), cy = 0.5f * (face.box.y0 + face.box.y1);
     const cv::Rect wanted(cvRound(cx - side / 2), cvRound(cy - side / 2), cvRound(side), cvRound(side));
     const cv::Rect region = wanted & cv::Rect(0, 0, gray_.cols, gray_.rows);
-    if (region.area() <= 0) return false;
+    if (region.area() <= 0) return std::nullopt;
     const double scale = std::min(1.0, static_cast<double>(kVerifyCropWidth) / region.width);
     cv::resize(gray_(region), crop_, cv::Size(), scale, scale, cv::INTER_AREA);
+    std::optional<Box> nearest;
+    float nearestDistance = std::numeric_limits<float>::max();
     for (const auto& d : detector_->detect(core::viewOf(crop_))) {
-        const float x = region.x + 0.5f * (d.box.x0 + d.box.x1) / static_cast<float>(scale);
-        const float y = region.y + 0.5f * (d.box.y0 + d.box.y1) / static_cast<float>(scale);
-        if (core::contains(face.box, x, y)) return true;
+        const auto toFrame = [&](float v, int origin) { return static_cast<float>(origin + v / scale); };
+        const Box box{toFrame(d.box.x0, region.x), toFrame(d.box.y0, region.y), toFrame(d.box.x1, region.x),
+                      toFrame(d.box.y1, region.y)};
+        const float distance = std::hypot(0.5f * (box.x0 + box.x1) - cx, 0.5f * (box.y0 + box.y1) - cy);
+        if (distance < nearestDistance) {
+            nearest = box;
+            nearestDistance = distance;
+        }
     }
-    return false;
+    return nearest;
+}
+
+bool TrackerCore::verify(pipeline::FaceTrack& face, bool lostWithoutDetection) {
+    const auto start = Clock::now();
+    const std::optional<Box> found = findAgain(face);
+    time(kVerify, start);
+    if (!found) {
+        face.lost = lostWithoutDetection;
+        return false;
+    }
+    if (agrees(face.box, *found)) return false;
+    // The detector sees the face elsewhere: the stages start again from its box,
+    // unless another followed face is already there.
+    const bool taken = std::any_of(tracks_.begin(), tracks_.end(), [&](const pipeline::FaceTrack& t) {
+        return &t != &face && core::intersectionOverUnion(t.box, *found) > kSameFaceIou;
+    });
+    face.lost = taken;
+    face.box = *found;
+    face.fresh = true;
+    return !taken;
 }
 
 void TrackerCore::runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face) {
@@ -154,7 +241,7 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
     const long frameIndex = frame_index_++;
     std::fill(ms_.begin(), ms_.end(), 0.0);
     std::fill(ran_.begin(), ran_.end(), false);
-    for (auto& t : tracks_) t.located = false;
+    for (auto& t : tracks_) t.located = t.doubtful = false;
 
     // Faces first: new ones from the detector or the caller, followed ones verified now and then.
     const int followed = static_cast<int>(tracks_.size());
@@ -175,16 +262,25 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
         for (auto& t : tracks_) {
             if (t.fresh || t.age % settings_.verify_interval != 0) continue;
             ensureGray();
-            const auto start = Clock::now();
-            t.lost = !verify(t);
-            time(kVerify, start);
+            verify(t, true);
         }
         dropLost();
     }
 
     for (int pass = 0; pass < 2; ++pass) {
         if (!tracks_.empty()) ensureGray();
-        for (auto& t : tracks_) runStages(input, t);
+        for (auto& t : tracks_) {
+            runStages(input, t);
+            if (!t.lost && !t.fresh && !t.appearance.empty() && appearanceOf(gray_, t.box, appearance_)) {
+                if (alike(appearance_, t.appearance) < kAlike) t.doubtful = true;
+            }
+            // A face a stage doubts is checked now; one the detector sees elsewhere runs
+            // again from there. Without a detection it stays (blur hides faces from it too).
+            if (!t.lost && t.doubtful && !t.fresh && settings_.verify_interval > 0 && verify(t, false)) {
+                t.located = false;
+                runStages(input, t);
+            }
+        }
         dropLost();
         // Every followed face was lost: look again in this very frame.
         if (!tracks_.empty() || searched) break;
@@ -195,6 +291,7 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
     out.faces.resize(tracks_.size());
     for (std::size_t i = 0; i < tracks_.size(); ++i) {
         pipeline::FaceTrack& t = tracks_[i];
+        if (!appearanceOf(gray_, t.box, t.appearance)) t.appearance.clear();
         t.result.id = t.id;
         t.result.tracked = !t.fresh;
         t.result.box = t.box;

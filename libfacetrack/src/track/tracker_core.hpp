@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace facetrack::track {
@@ -50,7 +51,13 @@ private:
 
     void addFace(const Box& box, float score);
     void detect(const ImageView& frame);
-    bool verify(const pipeline::FaceTrack& face);  // the detector finds the face again on a crop around it
+    /// The detection nearest the face's centre on a crop around it, in frame pixels.
+    std::optional<Box> findAgain(const pipeline::FaceTrack& face);
+    /// Checks a followed face with the detector. Nothing found: lost when
+    /// `lostWithoutDetection`. Found where the face's box does not agree: the
+    /// face restarts from the detection (fresh; returns true), or is lost when
+    /// another followed face is there already.
+    bool verify(pipeline::FaceTrack& face, bool lostWithoutDetection);
     void runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face);
     void dropLost();
     void time(int slot, Clock::time_point start);
@@ -65,6 +72,7 @@ private:
 
     std::vector<pipeline::FaceTrack> tracks_;
     cv::Mat gray_, crop_;     // reused frame to frame
+    std::vector<float> appearance_;
     int next_id_ = 1;
     long frame_index_ = 0;
     double last_time_;
