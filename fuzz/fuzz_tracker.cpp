@@ -11,7 +11,11 @@
 //   time: uint16 (milliseconds), then a flags byte: bit 0 the time is NaN,
 //     bit 1 it goes back by the value instead, bit 2 the tracker is reset,
 //     bit 3 the frame comes with a caller's face box (the header's last byte
-//     is then its size in percent of the frame)
+//     is then its size in percent of the frame), bit 4 the frame goes to a
+//     second tracker that also runs the cnn stage (none is shipped: a cascade
+//     of the tests' fixture nets, random weights, two rounds of a pose and
+//     expression update, then the landmark net, so that the warp and the nets
+//     see every frame the shipped stages see)
 // The height is cut to the rows the bytes hold: the library cannot see a
 // buffer's length, so a short buffer is the caller's bug, not a finding.
 // A frame must give a result or a facetrack::Error; a result's numbers must be
@@ -19,12 +23,17 @@
 
 #include "fuzz_common.hpp"
 
+#include "cnn/cnn_model_data.hpp"
+#include "core/binary_io.hpp"
+#include "facetrack/cnn_model.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/tracker.hpp"
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace {
@@ -34,6 +43,23 @@ using namespace facetrack;
 Tracker& tracker() {
     static Tracker t(Models::loadDefault());
     return t;
+}
+
+Tracker& cnnTracker() {
+    static const std::unique_ptr<Tracker> t = [] {
+        const std::string fixtures = std::string(FACETRACK_FUZZ_SOURCE_DIR) + "/tests/data/";
+        cnn::CnnModelData cascade;
+        cascade.expressions = {"jawOpen"};
+        cascade.stages.push_back({2, core::readFileBytes(fixtures + "cnn_parity.onnx", "fixture")});
+        cascade.landmark_net = core::readFileBytes(fixtures + "cnn_landmarks_fixture.onnx", "fixture");
+        cascade.provenance = "fuzz_tracker: the tests' fixture nets";
+        const std::string path = (std::filesystem::temp_directory_path() / "facetrack_fuzz_cascade.ftm").string();
+        cnn::writeCnnModel(path, cascade);
+        Models models = Models::loadDefault();
+        models.cnn = CnnModel::load(path);
+        return std::make_unique<Tracker>(models);
+    }();
+    return *t;
 }
 
 std::uint16_t u16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
@@ -63,7 +89,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     view.height = std::min(requestedHeight, rows);
     if (view.height == 0) view.data = available > 0 ? view.data : nullptr;
 
-    if (flags & 4) tracker().reset();
+    Tracker& chosen = (flags & 16) ? cnnTracker() : tracker();
+    if (flags & 4) chosen.reset();
     if (flags & 1) {
         time = std::numeric_limits<double>::quiet_NaN();
     } else {
@@ -78,9 +105,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     FrameResult result;
     try {
         if (flags & 8) {
-            tracker().process(view, time, boxes, result);
+            chosen.process(view, time, boxes, result);
         } else {
-            tracker().process(view, time, result);
+            chosen.process(view, time, result);
         }
     } catch (const Error&) {
         return 0;  // a frame the tracker refuses, with its reason

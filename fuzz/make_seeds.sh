@@ -5,7 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 corpus=fuzz/corpus
-rm -rf "$corpus" && mkdir -p "$corpus/fuzz_model_files" "$corpus/fuzz_tracker" "$corpus/fuzz_handshake" "$corpus/fuzz_c_api"
+# Inputs that once crashed (regression-*) stay.
+mkdir -p "$corpus/fuzz_model_files" "$corpus/fuzz_tracker" "$corpus/fuzz_handshake" "$corpus/fuzz_c_api"
+find "$corpus" -type f ! -name 'regression-*' -delete
 
 # Model files: per loader (the order of fuzz_model_files.cpp's kFormats), the
 # file's first 256 bytes as a whole file, and its payload's first 2 KB to be
@@ -35,6 +37,8 @@ ffmpeg -loglevel error -i "$tmp/synthetic_gaze_0.png" -vf scale=96:72 -pix_fmt b
 head -c 3072 /dev/urandom > "$tmp/noise.raw"
 frame face_gray 160 120 0 0 0 "$tmp/face_gray.raw"
 frame face_bgr_box 96 72 1 0 8 "$tmp/face_bgr.raw"
+frame face_gray_cnn 160 120 0 0 16 "$tmp/face_gray.raw"      # the tracker with the cnn stage
+frame face_bgr_box_cnn 96 72 1 0 24 "$tmp/face_bgr.raw"
 frame noise_rgba 32 24 4 0 0 "$tmp/noise.raw"
 frame odd_stride 7 5 2 3 2 "$tmp/noise.raw"
 frame short_stride 8 8 0 255 1 "$tmp/noise.raw"
