@@ -35,7 +35,8 @@ const char* kUsage = R"(usage: facetrack eval-expressions [CLIP...] [--labels CS
 The ARKit-52 weights on hand-labelled segments (default data/expression_labels.csv, clips from
 ../shared/data/clips; with no CLIP, every clip the labels name):
   neutral   per shape, the mean over neutral segments (eyeLook shapes excluded from the worst)
-  response  per labelled expression, the mean of its shapes minus their neutral mean
+  response  per labelled expression, the mean of its shapes minus their neutral mean; then the
+            same for each of its segments
   mirror    mean |left shape (image) - right shape (mirrored image)| over all frames
   yaw       the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg), the largest change
   dense     with --dense (label_dense's clips.csv): per shape, Pearson r between the tracker and the
@@ -245,6 +246,23 @@ NeutralFigures reportSegments(const std::vector<Segment>& segments, const std::m
         for (std::size_t k = 0; k < shapes.size(); ++k)
             std::printf(" %s %+.2f", shapes[k].c_str(), sums[k] / static_cast<double>(frames) - neutral[idx(shapes[k])]);
         std::printf("\n");
+        // Each segment on its own: a label's pooled figure hides segments that show it weakly.
+        for (const auto& s : segments) {
+            if (s.label != label || !tracks.count(s.clip)) continue;
+            const Track& t = tracks.at(s.clip);
+            std::vector<double> segmentSums(shapes.size(), 0.0);
+            long segmentFrames = 0;
+            for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
+                if (!t.arkit[static_cast<std::size_t>(f)]) continue;
+                for (std::size_t k = 0; k < shapes.size(); ++k) segmentSums[k] += (*t.arkit[static_cast<std::size_t>(f)])[idx(shapes[k])];
+                ++segmentFrames;
+            }
+            if (segmentFrames == 0) continue;
+            std::printf("    %s %d-%d:", std::filesystem::path(s.clip).stem().string().c_str(), s.first, s.last);
+            for (std::size_t k = 0; k < shapes.size(); ++k)
+                std::printf(" %+.2f", segmentSums[k] / static_cast<double>(segmentFrames) - neutral[idx(shapes[k])]);
+            std::printf("\n");
+        }
     }
     return figures;
 }
