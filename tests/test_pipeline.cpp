@@ -16,14 +16,24 @@
 namespace facetrack {
 namespace {
 
-/// Finds the same box every frame (or none while `present` is false), counting calls.
+/// Finds the bright square of the test frame (the bounding box of grey levels
+/// above 150, in whatever image or crop it is given; none while `present` is
+/// false), counting calls. On StageRunner's frame: (20, 10, 60, 50).
 class FakeDetector final : public FaceDetector {
 public:
     explicit FakeDetector(int* calls, const bool* present = nullptr) : calls_(calls), present_(present) {}
-    std::vector<Detection> detect(const ImageView&) override {
+    std::vector<Detection> detect(const ImageView& image) override {
         ++*calls_;
         if (present_ && !*present_) return {};
-        return {{{20.f, 10.f, 60.f, 50.f}, 0.9f}};
+        int x0 = image.width, y0 = image.height, x1 = -1, y1 = -1;
+        for (int y = 0; y < image.height; ++y) {
+            for (int x = 0; x < image.width; ++x) {
+                if (image.data[static_cast<std::size_t>(y) * image.stride + x] <= 150) continue;
+                x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
+            }
+        }
+        if (x1 < 0) return {};
+        return {{{static_cast<float>(x0), static_cast<float>(y0), static_cast<float>(x1), static_cast<float>(y1)}, 0.9f}};
     }
     std::string kind() const override { return "fake"; }
     std::string modelPath() const override { return "none"; }
@@ -32,6 +42,13 @@ private:
     int* calls_;
     const bool* present_;
 };
+
+/// 80 x 60 grey 100 with a bright square, the fake detector's face, at (20, 10)-(60, 50).
+std::vector<std::uint8_t> frameWithAFace() {
+    std::vector<std::uint8_t> p(80 * 60, 100);
+    for (int y = 10; y < 50; ++y) std::fill(p.begin() + y * 80 + 20, p.begin() + y * 80 + 60, std::uint8_t{200});
+    return p;
+}
 
 struct Counter final : pipeline::StageState {
     int runs = 0;
@@ -45,6 +62,8 @@ public:
     FakeStage(std::string name, bool available, std::vector<std::string>* log, float index)
         : name_(std::move(name)), available_(available), log_(log), index_(index) {}
     std::vector<int> fail_on;  // frame numbers (0-based) on which run() reports a lost face
+    std::vector<int> doubt_on; // frame numbers on which a followed face is moved by doubt_jump and doubted
+    float doubt_jump = 0.f;
     int frame = -1;            // set by the test before each process()
     Counter seen;              // the face state's counters as of the last run
     double dt = 0.0;           // the last run's FrameInput::dt
@@ -61,9 +80,12 @@ public:
         face.result.fit_residual = index_;
         if (!available_) face.result.gaze.emplace();  // must never happen: the Tracker does not run it
         Box moved = face.box;
-        moved.x0 += 1.f;
-        moved.x1 += 1.f;
+        const bool doubt = !face.fresh && std::find(doubt_on.begin(), doubt_on.end(), frame) != doubt_on.end();
+        const float step = 1.f + (doubt ? doubt_jump : 0.f);
+        moved.x0 += step;
+        moved.x1 += step;
         face.locate(moved);
+        if (doubt) face.doubtful = true;
         return std::find(fail_on.begin(), fail_on.end(), frame) == fail_on.end();
     }
     void resetCalibration(pipeline::StageState* state) const override { ++static_cast<Counter&>(*state).resets; }
@@ -105,7 +127,7 @@ protected:
         return n;
     }
 
-    std::vector<std::uint8_t> pixels = std::vector<std::uint8_t>(80 * 60, 100);
+    std::vector<std::uint8_t> pixels = frameWithAFace();
     std::vector<std::string> log;
     std::vector<FakeStage*> fakes;
     int detections = 0;
@@ -243,6 +265,39 @@ TEST_F(StageRunner, VerificationDropsAFaceTheDetectorNoLongerSees) {
     EXPECT_EQ(names(r), (std::vector<std::string>{"detect", "verify"}));  // verified, lost, searched again
 }
 
+// A face a stage doubts is checked with the detector in the same frame: seen
+// elsewhere, the stages run again from the detection (same id, reported as
+// found); seen where it is, or not seen at all, the face stays as it was.
+TEST_F(StageRunner, AFaceInDoubtIsCheckedAndRestartsWhereTheDetectorSeesIt) {
+    build({"a"}, 30);
+    fakes[0]->doubt_on = {2, 3, 4};
+    const int id = step().faces.at(0).id;  // the detector's box, 20..60, moved to 21..61
+    step();                                // 22..62
+    fakes[0]->doubt_jump = 12.f;           // frame 2: the stage slides to 35..75 and doubts it
+    FrameResult r = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));  // run again from the detection
+    EXPECT_EQ(detections, 2);
+    ASSERT_EQ(r.faces.size(), 1u);
+    EXPECT_EQ(r.faces[0].id, id);
+    EXPECT_FALSE(r.faces[0].tracked);
+    EXPECT_EQ(r.faces[0].box.x0, 21.f);    // the detection, moved once
+    EXPECT_EQ(names(r), (std::vector<std::string>{"verify", "a"}));
+
+    fakes[0]->doubt_jump = 0.f;            // frame 3: doubted where the detector sees it
+    r = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a"}));
+    EXPECT_EQ(detections, 3);
+    EXPECT_TRUE(r.faces.at(0).tracked);
+    EXPECT_EQ(r.faces[0].box.x0, 22.f);
+
+    present = false;                       // frame 4: doubted, the detector sees nothing: kept
+    fakes[0]->doubt_jump = 12.f;
+    r = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a"}));
+    ASSERT_EQ(r.faces.size(), 1u);
+    EXPECT_EQ(r.faces[0].box.x0, 35.f);
+}
+
 TEST_F(StageRunner, NullStagesAndDetectorsAreRefused) {
     pipeline::StageList withNull;
     withNull.push_back(nullptr);
@@ -255,7 +310,7 @@ TEST(TrackerApi, TakesTheApplicationsOwnDetector) {
     int calls = 0;
     Tracker tracker(models, {}, std::make_unique<FakeDetector>(&calls));
     EXPECT_EQ(tracker.stages()[0].detail.rfind("fake (none)", 0), 0u) << tracker.stages()[0].detail;
-    std::vector<std::uint8_t> gray(80 * 60, 100);
+    const std::vector<std::uint8_t> gray = frameWithAFace();
     FrameResult out;
     tracker.process({gray.data(), 80, 60, 80, PixelFormat::Gray8}, 0.0, out);
     EXPECT_EQ(calls, 1);

@@ -41,7 +41,7 @@ struct StageState {
 struct FaceTrack {
     // Lifecycle (the Tracker's).
     int id = 0;
-    bool fresh = true;      ///< found this frame (by the detector or a caller's box): start from `box`
+    bool fresh = true;      ///< found (again) this frame by the detector or a caller's box: start from `box`
     int age = 0;            ///< frames reported so far
     Box box;                ///< detector box while fresh, then wherever a stage locates the face
     bool located = false;   ///< a stage (or the detector) placed the face in this frame
