@@ -39,6 +39,7 @@ The ARKit-52 weights on hand-labelled segments (default data/expression_labels.c
             same for each of its segments
   mirror    mean |left shape (image) - right shape (mirrored image)| over all frames
   yaw       the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg), the largest change
+            (eyeLook excluded: a turned head's eyes turn back to the camera)
   dense     with --dense (label_dense's clips.csv): per shape, Pearson r between the tracker and the
             dense teacher labels over every tracked frame of the clips (teacher labels, not truth)
 Writes PREFIX_neutral.png (per-shape bars) and PREFIX_<clip>.png (time series of the expected
@@ -348,6 +349,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     double drift = 0;
     std::string driftShape = "-";
     for (int k = 0; k < kArkitBlendshapeCount; ++k) {
+        // A turned head's eyes turn back to the camera: the look shapes move by design.
+        if (std::string(arkitNames()[static_cast<std::size_t>(k)]).rfind("eyeLook", 0) == 0) continue;
         double lo = 1e9, hi = -1e9;
         for (int b = 0; b < 3; ++b) {
             if (binFrames[static_cast<std::size_t>(b)] < 10) continue;
