@@ -253,6 +253,7 @@ TEST(Cli, EvalExpressionsReportsNeutralAndResponsesAndRejectsBadLabels) {
     ASSERT_EQ(run.exit_code, 0) << run.err;
     EXPECT_NE(run.out.find("neutral ("), std::string::npos) << run.out;
     EXPECT_NE(run.out.find("smile       ("), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("    liveportrait_d0_greenscreen_gaze_smile 27-60: +"), std::string::npos) << run.out;  // the segment itself
     EXPECT_TRUE(std::filesystem::exists(plots + "_neutral.png"));
     EXPECT_TRUE(std::filesystem::exists(plots + "_liveportrait_d0_greenscreen_gaze_smile.png"));
     std::filesystem::remove(plots + "_neutral.png");
