@@ -21,8 +21,9 @@ constexpr float kSameFaceIou = 0.3f;   // a detection overlapping a followed fac
 // the middle of the face's box: within a quarter of its width of its centre
 // across, 0.4 of its height up or down. On the clips, well-followed faces put
 // YuNet's centre within 0.05 widths across and 0.08-0.27 heights up (its box
-// takes in the forehead); a fit that slid onto the side of a fast-turning head
-// put it 0.27-0.50 widths across.
+// takes in the forehead); on 2,559 300-W photographs, within 0.14 across below
+// 30 deg of yaw and 0.20 at 30-45 deg, 0.03-0.30 up. A fit that slid onto the
+// side of a fast-turning head put it 0.27-0.50 widths across.
 constexpr float kAgreeAcross = 0.25f, kAgreeUpDown = 0.4f;
 
 // What the stages followed is checked against what they followed a frame ago:
