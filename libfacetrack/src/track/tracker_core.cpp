@@ -114,7 +114,7 @@ std::vector<StageInfo> TrackerCore::stages() const {
     out.push_back(settings_.verify_interval > 0
                       ? StageInfo{"verify", true,
                                   "the detector on a crop around each followed face, every " +
-                                      std::to_string(settings_.verify_interval) + " frames and when a stage doubts it"}
+                                      std::to_string(settings_.verify_interval) + " frames and when a face is in doubt"}
                       : StageInfo{"verify", false, "off (TrackerConfig::verify_interval is 0)"});
     for (const auto& stage : stages_) out.push_back(stage->info());
     return out;
