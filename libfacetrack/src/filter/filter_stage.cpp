@@ -12,10 +12,18 @@ namespace facetrack::filter {
 namespace {
 
 constexpr double kTranslationScaleMm = 90.0;  // ~ an eye-corner distance: the unit of translation speed
+/// The landmarks' cutoff also rises with the speed of their centroid, times
+/// this factor times beta. The mean of 68 points carries about 1/8 of one
+/// point's noise, so it can carry a larger gain than a point's own speed: at
+/// the same jitter it lags fast head moves less (docs/benchmarks.md, "The
+/// filter on a face that moves").
+constexpr double kFaceMotionGain = 5.0;
 
 struct FilterFaceState final : pipeline::StageState {
-    explicit FilterFaceState(const OneEuroSettings& s) : landmarks(s), rotation(s), translation(s), expression(s) {}
+    explicit FilterFaceState(const OneEuroSettings& s)
+        : landmarks(s), rotation(s), translation(s), expression(s), face_motion(s.derivative_cutoff_hz) {}
     OneEuroFilter landmarks, rotation, translation, expression;
+    MotionSpeed face_motion;  // of the landmarks' centroid
     Eigen::Quaterniond last_rotation = Eigen::Quaterniond::Identity();  // keeps q and -q apart
     // The filters' inputs, sized once.
     Eigen::VectorXd landmark_sample, rotation_sample = Eigen::VectorXd(4), translation_sample = Eigen::VectorXd(3),
@@ -42,6 +50,7 @@ public:
         auto& s = static_cast<FilterFaceState&>(*state);
         if (face.fresh) {  // found (again): what the filters hold may be another place
             s.landmarks.reset();
+            s.face_motion.reset();
             s.rotation.reset();
             s.translation.reset();
             s.expression.reset();
@@ -57,10 +66,17 @@ public:
     }
 
 private:
-    static void filterLandmarks(double dt, FilterFaceState& s, Landmarks68& points) {
+    void filterLandmarks(double dt, FilterFaceState& s, Landmarks68& points) const {
         s.landmark_sample.resize(2 * static_cast<Eigen::Index>(points.size()));
-        for (std::size_t i = 0; i < points.size(); ++i) s.landmark_sample.segment<2>(2 * i) << points[i].x, points[i].y;
-        const Eigen::VectorXd& smooth = s.landmarks(s.landmark_sample, dt, std::max(1.f, core::eyeCornerDistance(points)));
+        Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            s.landmark_sample.segment<2>(2 * i) << points[i].x, points[i].y;
+            centroid += s.landmark_sample.segment<2>(2 * i);
+        }
+        centroid /= static_cast<double>(points.size());
+        const double scale = std::max(1.f, core::eyeCornerDistance(points));
+        const double faceMotionHz = kFaceMotionGain * config_.beta * s.face_motion(centroid, dt, scale);
+        const Eigen::VectorXd& smooth = s.landmarks(s.landmark_sample, dt, scale, faceMotionHz);
         for (std::size_t i = 0; i < points.size(); ++i) {
             points[i] = {static_cast<float>(smooth[2 * i]), static_cast<float>(smooth[2 * i + 1])};
         }

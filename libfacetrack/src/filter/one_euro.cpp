@@ -16,7 +16,8 @@ double alpha(double cutoffHz, double dt) {
 
 }  // namespace
 
-const Eigen::VectorXd& OneEuroFilter::operator()(const Eigen::VectorXd& x, double dt, double scale) {
+const Eigen::VectorXd& OneEuroFilter::operator()(const Eigen::VectorXd& x, double dt, double scale,
+                                                   double extraCutoffHz) {
     if (value_.size() != x.size() || !value_.allFinite() || !(dt > 0.0)) {
         value_ = x;
         speed_.setZero(x.size());
@@ -26,10 +27,21 @@ const Eigen::VectorXd& OneEuroFilter::operator()(const Eigen::VectorXd& x, doubl
     const double aSpeed = alpha(settings_.derivative_cutoff_hz, dt);
     speed_ += aSpeed * ((x - value_) / (dt * scale) - speed_);
     for (Eigen::Index i = 0; i < x.size(); ++i) {
-        const double cutoff = settings_.min_cutoff_hz + settings_.beta * std::abs(speed_[i]);
+        const double cutoff = settings_.min_cutoff_hz + extraCutoffHz + settings_.beta * std::abs(speed_[i]);
         value_[i] += alpha(cutoff, dt) * (x[i] - value_[i]);
     }
     return value_;
+}
+
+double MotionSpeed::operator()(const Eigen::Vector2d& p, double dt, double scale) {
+    if (!started_ || !(dt > 0.0) || !p.allFinite() || !speed_.allFinite()) {
+        speed_.setZero();
+    } else {
+        speed_ += alpha(cutoff_hz_, dt) * ((p - last_) / (dt * std::max(scale, 1e-9)) - speed_);
+    }
+    last_ = p;
+    started_ = p.allFinite();
+    return speed_.norm();
 }
 
 }  // namespace facetrack::filter

@@ -23,15 +23,38 @@ public:
     /// Filters the next sample, taken dt seconds after the previous one. Speed
     /// is measured in units of `scale` per second, so one setting serves pixels
     /// of faces of any size. The first sample (or one of another size) passes
-    /// through. Returns the filter's own state (valid until the next call);
-    /// allocates only when the size changes.
-    const Eigen::VectorXd& operator()(const Eigen::VectorXd& x, double dt, double scale = 1.0);
+    /// through. `extra_cutoff_hz` raises every element's cutoff by a speed
+    /// measured elsewhere (the whole face's motion, MotionSpeed). Returns the
+    /// filter's own state (valid until the next call); allocates only when the
+    /// size changes.
+    const Eigen::VectorXd& operator()(const Eigen::VectorXd& x, double dt, double scale = 1.0,
+                                      double extra_cutoff_hz = 0.0);
 
     void reset() { value_.resize(0); }
 
 private:
     OneEuroSettings settings_;
     Eigen::VectorXd value_, speed_;
+};
+
+/// The speed of one point, |v^|, in units of `scale` per second: its raw
+/// derivative low-passed at f_d, v^_i = v^_{i-1} + alpha(f_d, dt) ((p_i - p_{i-1}) / (dt scale) - v^_{i-1}).
+/// For the centroid of many noisy points this is a far steadier measure of how
+/// fast a face moves than any one point's speed.
+class MotionSpeed {
+public:
+    explicit MotionSpeed(double derivativeCutoffHz = 1.0) : cutoff_hz_(derivativeCutoffHz) {}
+
+    /// The speed after the next position, dt seconds after the previous one;
+    /// 0 for the first (or after a bad time step).
+    double operator()(const Eigen::Vector2d& p, double dt, double scale = 1.0);
+
+    void reset() { started_ = false; }
+
+private:
+    double cutoff_hz_;
+    bool started_ = false;
+    Eigen::Vector2d last_ = Eigen::Vector2d::Zero(), speed_ = Eigen::Vector2d::Zero();
 };
 
 }  // namespace facetrack::filter
