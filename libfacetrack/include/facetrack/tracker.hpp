@@ -62,7 +62,9 @@ struct CameraConfig {
 struct FilterConfig {
     bool enabled = true;
     double min_cutoff_hz = 1.0;         ///< cutoff at rest: lower = steadier
-    double beta = 2.0;                  ///< how fast the cutoff rises with speed: higher = less lag
+    /// How fast the cutoff rises with speed: higher = less lag. The landmarks'
+    /// cutoff rises with their own speed and, 5x as fast, with the whole face's.
+    double beta = 2.0;
     double derivative_cutoff_hz = 1.0;
 };
 
