@@ -3,7 +3,8 @@
 // Speed-based Low-pass Filter for Noisy Input in Interactive Systems", CHI 2012),
 // element-wise over a vector:
 //   x^_i = x^_{i-1} + alpha(f_c, dt) (x_i - x^_{i-1}),  alpha = 1 / (1 + 1 / (2 pi f_c dt)),
-//   f_c  = f_min + beta |dx^_i|,  dx^ the speed low-passed at f_d.
+//   f_c  = f_min + f_extra + beta |dx^_i|,  dx^ the speed low-passed at f_d,
+//   f_extra a cutoff the caller adds (0 in the paper; the filter stage's face motion).
 // Slow motion gets a low cutoff (no jitter), fast motion a high one (little lag).
 
 #include <Eigen/Core>
