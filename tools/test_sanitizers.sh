@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The tests again, built with AddressSanitizer and UndefinedBehaviorSanitizer
 # in their own build directory (build-asan). The demo (the GL driver is not
-# ours) and the benchmarks (timing under ASan means nothing) are left out.
+# ours), the benchmarks (timing under ASan means nothing) and the model tools
+# (no test runs them; the Release build compiles them) are left out.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 "$here/setup.sh"
 export FACETRACK_BUILD_DIR=build-asan
-"$here/build.sh" -DFACETRACK_SANITIZE=ON -DFACETRACK_BUILD_BENCHMARKS=OFF -DFACETRACK_BUILD_DEMO=OFF \
+"$here/build.sh" -DFACETRACK_SANITIZE=ON -DFACETRACK_BUILD_BENCHMARKS=OFF -DFACETRACK_BUILD_DEMO=OFF -DFACETRACK_BUILD_MODEL_TOOLS=OFF \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo
 cd "$here/../build-asan"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
