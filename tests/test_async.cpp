@@ -68,6 +68,7 @@ long maxRssKb() {
 TEST(AsyncTracker, PollingFasterThanTheSourceNeverBlocksAndSeesIncreasingFrames) {
     FACETRACK_REQUIRE_SHARED();
     const auto frames = clipFrames(60);
+    const auto began = Clock::now();
     AsyncTracker tracking(Models::loadDefault(), {}, std::make_unique<FakeCamera>(frames, std::chrono::milliseconds(20), 100));
     AsyncResult latest;
     std::vector<long> seen;
@@ -87,6 +88,7 @@ TEST(AsyncTracker, PollingFasterThanTheSourceNeverBlocksAndSeesIncreasingFrames)
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     if (tracking.latest(latest)) seen.push_back(latest.frame_number);  // the one that came with the end
+    const double elapsedMs = std::chrono::duration<double, std::milli>(Clock::now() - began).count();
     const AsyncStats stats = tracking.stats();
     EXPECT_TRUE(stats.finished);
     EXPECT_TRUE(stats.error.empty()) << stats.error;
@@ -103,7 +105,10 @@ TEST(AsyncTracker, PollingFasterThanTheSourceNeverBlocksAndSeesIncreasingFrames)
     const double medianCallMs = callMs[callMs.size() / 2];
     EXPECT_LT(medianCallMs, 1.0);
     EXPECT_GT(stats.mean_latency_ms, 0.0);
-    EXPECT_LT(stats.mean_latency_ms, 100.0);
+    // Nothing queues: a frame waits at most for the frame in progress, then its own
+    // tracking, each about elapsed / tracked on a busy tracker (at any machine speed,
+    // under ASan too); a queue would add every queued frame's time.
+    EXPECT_LT(stats.mean_latency_ms, 2.5 * elapsedMs / static_cast<double>(std::max(1L, stats.frames_tracked)));
     std::printf("50 fps source: %ld tracked, %ld dropped, mean latency %.2f ms, median latest() %.4f ms over %zu calls\n",
                 stats.frames_tracked, stats.frames_dropped, stats.mean_latency_ms, medianCallMs, callMs.size());
 }
