@@ -1,7 +1,8 @@
 // train_landmarks: trains the LBF landmark model on the 300-W training split.
 //
 //   train_landmarks [--data ../shared/data/faces300w] [--out models/landmarks_lbf.ftm]
-//                   [--stages 7] [--trees 4] [--depth 5] [--inits 6] [--threads 2] [--seed 1] [--ridge 15000] [--resume]
+//                   [--stages 7] [--trees 4] [--depth 5] [--inits 6] [--threads 2] [--seed 1] [--ridge 15000]
+//                   [--hull-padding 0.1] [--resume]
 //
 // Long: run it under nohup (docs/landmarks.md). After each stage it writes
 // OUT.partial; --resume continues from there. Deterministic for a given seed.
@@ -138,11 +139,11 @@ Box jitter(const Box& b, float shift, float scale, std::mt19937_64& rng) {
 
 int run(int argc, char** argv) {
     const Args args(std::vector<std::string>(argv + 1, argv + argc),
-                         {"--data", "--out", "--stages", "--trees", "--depth", "--inits", "--threads", "--seed", "--ridge"},
+                         {"--data", "--out", "--stages", "--trees", "--depth", "--inits", "--threads", "--seed", "--ridge", "--hull-padding"},
                          {"--resume", "--help"});
     if (args.has("--help")) {
         std::puts("usage: train_landmarks [--data DIR] [--out FILE] [--stages 7] [--trees 4] [--depth 5] [--inits 6]\n"
-                  "                       [--threads 2] [--seed 1] [--ridge 15000] [--resume]");
+                  "                       [--threads 2] [--seed 1] [--ridge 15000] [--hull-padding 0.1] [--resume]");
         return 0;
     }
     setLogHandler({});
@@ -155,6 +156,8 @@ int run(int argc, char** argv) {
     o.threads = args.integer("--threads", o.threads);
     o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1));
     o.ridge = static_cast<float>(args.number("--ridge", o.ridge));
+    o.hull_padding = static_cast<float>(args.number("--hull-padding", o.hull_padding));
+    if (!(o.hull_padding >= 0.f && o.hull_padding <= 1.f)) throw Error("--hull-padding must be in [0, 1]");
     o.progress = progressBar;
     const int inits = args.integer("--inits", 6);
 
