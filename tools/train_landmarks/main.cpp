@@ -157,7 +157,7 @@ int run(int argc, char** argv) {
     o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1));
     o.ridge = static_cast<float>(args.number("--ridge", o.ridge));
     o.hull_padding = static_cast<float>(args.number("--hull-padding", o.hull_padding));
-    if (!(o.hull_padding >= 0.f && o.hull_padding <= 1.f)) throw Error("--hull-padding must be in [0, 1]");
+    if (!(o.hull_padding >= 0.f && o.hull_padding < 1.f)) throw Error("--hull-padding must be in [0, 1)");  // the model file's bound
     o.progress = progressBar;
     const int inits = args.integer("--inits", 6);
 
