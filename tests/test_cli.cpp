@@ -192,7 +192,7 @@ TEST_P(EveryOption, RefusesBadValuesBeforeOpeningAnything) {
                 last = line;
             }
             EXPECT_EQ(last.rfind(prefix, 0), 0u) << what << ": " << run.err;
-            const bool outputPath = option == "--out" || option == "--overlay" || option == "--plot";
+            const bool outputPath = option == "--out" || option == "--overlay" || option == "--plot" || option == "--points-out";
             if (value == "nan" && !outputPath) {
                 EXPECT_EQ(run.err.find("/nonexistent"), std::string::npos) << what << ": the input was opened before the option was checked: " << run.err;
             }

@@ -48,6 +48,11 @@ TEST(Shape2d, NmeIsMeanErrorOverOuterEyeCornerDistance) {
     Shape2 predicted = truth;
     predicted.row(0).array() += 3.f;  // every point 3 px off
     EXPECT_NEAR(nme68(predicted, truth), 0.03f, 1e-6f);
+    predicted.col(30).y() += 4.f;  // the nose tip 5 px off
+    const Eigen::VectorXf errors = pointErrors68(predicted, truth);
+    EXPECT_NEAR(errors(30), 0.05f, 1e-6f);
+    EXPECT_NEAR(errors(0), 0.03f, 1e-6f);
+    EXPECT_NEAR(nme68(predicted, truth), (67 * 0.03f + 0.05f) / 68, 1e-6f);
 }
 
 TEST(Shape2d, BoxNmeIsMeanErrorOverTheTruthsBoxSize) {

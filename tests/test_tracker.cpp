@@ -55,23 +55,23 @@ TEST(Tracker, ReportsDetectionAndLeavesStagesWithoutModelsEmpty) {
 TEST(Tracker, StagesSayWhatIsNotAvailable) {
     const Tracker tracker(faceOnly());
     const auto stages = tracker.stages();
-    const std::vector<std::string> order = {"detect", "verify", "landmarks", "fit", "cnn", "gaze", "filter"};
+    const std::vector<std::string> order = {"detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter"};
     ASSERT_EQ(stages.size(), order.size());
     for (std::size_t i = 0; i < order.size(); ++i) EXPECT_EQ(stages[i].name, order[i]);
     EXPECT_TRUE(stages[0].available);
     EXPECT_TRUE(stages[1].available);
-    // Without a landmark model neither landmarks nor the fit can run; CNN and gaze are not built.
-    for (std::size_t i = 2; i < 6; ++i) {
+    // Without a landmark model neither landmarks, their refiner nor the fit can run; CNN and gaze are not built.
+    for (std::size_t i = 2; i < 7; ++i) {
         EXPECT_FALSE(stages[i].available) << stages[i].name;
         EXPECT_EQ(stages[i].detail.rfind("not available", 0), 0u) << stages[i].detail;
     }
-    EXPECT_TRUE(stages[6].available);
+    EXPECT_TRUE(stages[7].available);
     TrackerConfig config;
     config.filter.enabled = false;
     config.verify_interval = 0;
     const auto off = Tracker(faceOnly(), config).stages();
     EXPECT_FALSE(off[1].available);
-    EXPECT_FALSE(off[6].available);
+    EXPECT_FALSE(off[7].available);
 }
 
 TEST(Tracker, TrackersShareTheModelsFitBasisInsteadOfBuildingTheirOwn) {

@@ -15,9 +15,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 
 namespace fs = std::filesystem;
@@ -29,15 +31,15 @@ namespace {
 const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
                                 [--cascade FILE] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
                                 [--plot ced.png] [--max-error 0.08] [--landmark-starts N]
-                                [--tracked-frames N]
+                                [--tracked-frames N] [--points-out FILE.csv]
 Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
 YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
 root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
 Methods, side by side with the same boxes:
-  facetrack LBF + fit + CNN  what the tracker reports: LBF, the fit, the CNN cascade and its
-                           landmark net (--cascade, default: the shipped cnn_cascade.ftm when it
-                           has one; --lbf-only leaves it out); a face whose fit does not hold
-                           keeps LBF's landmarks (counted as "dropped")
+  facetrack LBF + refiner  what the tracker reports: LBF, the CNN landmark refiner, the fit, and
+                           a CNN cascade's landmark net (--cascade, default: the shipped
+                           cnn_cascade.ftm, which has the refiner alone; --lbf-only leaves them
+                           out); a face whose fit does not hold keeps LBF's landmarks ("dropped")
   facetrack LBF, N starts  --model (default: the shipped landmarks_lbf.ftm) from --landmark-starts N
                            starts, averaged (default 5, the tracker's), and from one start
   facetrack tracked        --tracked-frames N: the tracker (LBF + fit, no CNN, no filter) given the
@@ -47,7 +49,10 @@ Methods, side by side with the same boxes:
   dlib shape_predictor     --dlib FILE (default /usr/share/dlib/shape_predictor_68_face_landmarks.dat)
 Prints per method: faces, mean and median NME (300-W: mean point error over the
 outer-eye-corner distance), failure rate (NME > max error), AUC of the CED up to
-the max error, and ms per face. --plot writes the CED curves as a PNG.)";
+the max error, and ms per face, then the mean NME of each face region (jaw, brows,
+nose, eyes, mouth). --plot writes the CED curves as a PNG; --points-out writes every
+face's points, one CSV row per face and method (image, method, x0, y0, ..., x67, y67;
+the annotation's rows have method "annotation").)";
 
 using core::Shape2;
 
@@ -56,6 +61,7 @@ struct Method {
     std::string name;
     std::function<Shape2(const cv::Mat& bgr, const cv::Mat& gray, const Box& box)> fit;
     std::vector<double> nmes{};
+    std::array<double, std::size(core::kRegions68)> region_sums{};  ///< per region, the sum over faces of its mean point error
     double ms = 0.0;
 
     Method(std::string n, std::function<Shape2(const cv::Mat&, const cv::Mat&, const Box&)> f)
@@ -131,11 +137,17 @@ Method dlibShapePredictor(const std::string& path, bool seenInTraining) {
             }};
 }
 
+void writePointsRow(std::ofstream& out, const std::string& image, const std::string& method, const Shape2& points) {
+    out << '"' << image << "\",\"" << method << '"';  // quoted: method names have commas
+    for (int i = 0; i < points.cols(); ++i) out << ',' << points(0, i) << ',' << points(1, i);
+    out << '\n';
+}
+
 }  // namespace
 
 int runEvalLandmarks(const std::vector<std::string>& argv) {
     const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts",
-                                 "--tracked-frames"},
+                                 "--tracked-frames", "--points-out"},
                     {"--help", "--lbf-only"});
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -182,6 +194,16 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     auto detector = createFaceDetector(config);
     const auto faces = args.has("--split") ? tools::list300W(dir, tools::parseSplit(args.get("--split"))) : tools::listAnnotated(dir);
 
+    std::ofstream pointsOut;
+    if (args.has("--points-out")) {
+        pointsOut.open(args.get("--points-out"));
+        if (!pointsOut) throw Error("cannot write '" + args.get("--points-out") + "'");
+        pointsOut << "image,method";
+        for (int i = 0; i < 68; ++i) pointsOut << ",x" << i << ",y" << i;
+        pointsOut << '\n';
+        pointsOut.precision(7);
+    }
+
     int missed = 0;
     cv::Mat gray;
     for (std::size_t k = 0; k < faces.size(); ++k) {
@@ -195,11 +217,18 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             continue;
         }
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+        if (pointsOut.is_open()) writePointsRow(pointsOut, faces[k].image, "annotation", truth);
         for (auto& m : methods) {
             const auto start = std::chrono::steady_clock::now();
             const Shape2 fitted = m.fit(bgr, gray, *box);
             m.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-            m.nmes.push_back(core::nme68(fitted, truth));
+            const Eigen::VectorXf errors = core::pointErrors68(fitted, truth);
+            m.nmes.push_back(errors.mean());
+            for (std::size_t r = 0; r < m.region_sums.size(); ++r) {
+                const auto& region = core::kRegions68[r];
+                m.region_sums[r] += errors.segment(region.first, region.end - region.first).mean();
+            }
+            if (pointsOut.is_open()) writePointsRow(pointsOut, faces[k].image, m.name, fitted);
         }
         if ((k + 1) % 50 == 0 || k + 1 == faces.size()) {
             std::fprintf(stderr, "\r%zu/%zu faces", k + 1, faces.size());
@@ -220,6 +249,14 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         std::snprintf(label, sizeof label, "%s: mean %.2f%%, AUC %.3f", m.name.c_str(), 100 * s.mean, s.auc);
         curves.push_back({label, m.nmes});
     }
+    std::printf("\nmean NME by region\n%-40s", "method");
+    for (const auto& region : core::kRegions68) std::printf(" %8s", region.name);
+    for (const auto& m : methods) {
+        std::printf("\n%-40s", m.name.c_str());
+        for (double sum : m.region_sums) std::printf(" %7.2f%%", 100 * sum / std::max<std::size_t>(1, m.nmes.size()));
+    }
+    std::putchar('\n');
+    if (pointsOut.is_open()) std::printf("points: %s\n", args.get("--points-out").c_str());
     if (args.has("--plot")) {
         writeCedPlot(args.get("--plot"), curves, maxError,
                      "CED, " + (args.has("--split") ? args.get("--split") + " split" : dir));

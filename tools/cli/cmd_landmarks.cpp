@@ -20,9 +20,10 @@ const char* kUsage = R"(usage: facetrack landmarks IMAGE|DIR|CLIP [--box x0,y0,x
                            [--detector auto|yunet|cascade] [--yunet PATH] [--min-score S]
 68 landmarks (iBUG order, 0-based pixels) for each face, one JSON line per image or frame:
   {"image": PATH, "frame": N, "method": M, "faces": [{"box": [x0,y0,x1,y1], "score": s, "landmarks": [[x,y], ...]}]}
-Each image or frame on its own. The landmarks are the tracker's: LBF, the fit, the CNN cascade
-and its landmark net (--cascade, default: the shipped cnn_cascade.ftm when it has one), or LBF's
-alone with --lbf-only or without such a cascade, and for a face whose fit does not hold; "method" says which.
+Each image or frame on its own. The landmarks are the tracker's: LBF, the CNN landmark refiner,
+the fit, the CNN cascade and its landmark net (--cascade, default: the shipped cnn_cascade.ftm,
+which has the refiner alone), or LBF's alone with --lbf-only or without such nets, and for a face
+whose fit does not hold; "method" says which.
 --box skips detection and starts from that box (drawn like YuNet's; score is null).
 --model defaults to landmarks_lbf.ftm in the model directory.)";
 

@@ -15,17 +15,17 @@ StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const s
     const std::string path = cascadePath.empty() ? CnnModel::defaultPath() : cascadePath;
     if (cascadePath.empty() && !std::filesystem::exists(path, ec)) return;
     auto cascade = CnnModel::load(path);
-    if (!cascade->hasLandmarkNet()) {
-        if (!cascadePath.empty()) throw Error("CNN cascade '" + path + "' has no landmark net");
+    if (!cascade->hasLandmarkNet() && !cascade->hasRefiner()) {
+        if (!cascadePath.empty()) throw Error("CNN file '" + path + "' has neither a landmark net nor a landmark refiner");
         return;
     }
+    method_ = std::string("facetrack LBF") + (cascade->hasRefiner() ? " + refiner" : "") + (cascade->hasLandmarkNet() ? " + fit + CNN" : "");
     TrackerConfig still;
     still.filter.enabled = false;
     still.max_faces = 1;
     still.landmark_starts = starts;
     still.detector.kind = boxPrior == "cascade" ? DetectorKind::Cascade : DetectorKind::YuNet;  // its kind picks LBF's box prior
     tracker_ = std::make_unique<Tracker>(Models{FaceModel::loadDefault(), lbf_, nullptr, std::move(cascade)}, still);
-    method_ = "facetrack LBF + fit + CNN";
 }
 
 Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Box& box, bool* dropped) {

@@ -1,8 +1,8 @@
 #pragma once
 // The 68 landmarks of a face in a still image, from a box, the way users get
-// them: the whole pipeline (LBF, the fit, the CNN cascade with its landmark
-// net: docs/cnn.md), or LBF alone (issue 17: `landmarks` and `eval-landmarks`
-// report the pipeline's by default).
+// them: the whole pipeline (LBF, the landmark refiner, the fit, the CNN cascade
+// with its landmark net: docs/cnn.md), or LBF alone (issue 17: `landmarks` and
+// `eval-landmarks` report the pipeline's by default).
 
 #include "facetrack/facetrack.hpp"
 
@@ -15,14 +15,14 @@ namespace facetrack::cli {
 
 class StillLandmarks {
 public:
-    /// `cascadePath`: a CNN cascade file, or "" for the shipped one when it
-    /// exists. `lbfOnly`, or no cascade with a landmark net: LBF alone.
+    /// `cascadePath`: a CNN file, or "" for the shipped one when it exists.
+    /// `lbfOnly`, or a file with neither a landmark net nor a refiner: LBF alone.
     /// `boxPrior`: the detector whose boxes are given, "yunet" or "cascade".
     /// `starts`: LBF from that many starts, averaged (TrackerConfig::landmark_starts).
     StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
                    const std::string& boxPrior = "yunet", int starts = TrackerConfig{}.landmark_starts);
 
-    /// What the landmarks are: "LBF + fit + CNN" or "LBF".
+    /// What the landmarks are: "facetrack LBF", with " + refiner" and " + fit + CNN" for the nets that move them.
     const std::string& method() const { return method_; }
     bool usesPipeline() const { return tracker_ != nullptr; }
 

@@ -3,7 +3,11 @@
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
 //                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv] [--min-validation-r R]]
-//                        --out build/cnn/cascade.ftm [--provenance "..."]
+//                        [--refiner build/refine/net.onnx] --out build/cnn/cascade.ftm [--provenance "..."]
+//
+// --refiner: the landmark refiner of tools/train_refine/train_refine.py (cnn/landmark_refiner.hpp),
+// with its NET.refiner.txt beside it (the patch size, the 136 mean-shape values, the 68 shares);
+// with it --nets may be left out.
 //
 // --expressions-only: the nets were trained to read expressions (train_stage.py --expressions);
 // the stage keeps the fit's pose and the shapes the fit estimates (cnn_model_data.hpp).
@@ -113,14 +117,14 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from",
-                                                                                                  "--min-validation-r"},
+                                                                                                  "--min-validation-r", "--refiner"},
                            {"--help", "--expressions-only"});
-    if (args.has("--help") || !args.has("--nets") || !args.has("--out")) {
+    if (args.has("--help") || !(args.has("--nets") || args.has("--refiner")) || !args.has("--out")) {
         std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
-                  "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R]");
+                  "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]");
         return args.has("--help") ? 0 : 2;
     }
-    const auto nets = split(args.get("--nets"));
+    const auto nets = split(args.get("--nets", ""));
     auto rounds = split(args.get("--rounds", ""));
     if (rounds.empty()) rounds.assign(nets.size(), "1");
     if (rounds.size() != nets.size()) throw Error("--rounds needs one count per net");
@@ -166,6 +170,19 @@ int run(int argc, char** argv) {
             if (model.reported[k]) std::printf(" %s", model.expressions[k].c_str());
         }
         std::printf("\n");
+    }
+    if (args.has("--refiner")) {
+        const std::string path = args.get("--refiner");
+        model.refiner_net = readBytes(path);
+        std::stringstream layout(readBytes(path.substr(0, path.size() - std::string(".onnx").size()) + ".refiner.txt"));
+        layout >> model.refiner_patch_size;
+        model.refiner_mean.resize(136);
+        model.refiner_share.resize(68);
+        for (float& v : model.refiner_mean) layout >> v;
+        for (float& v : model.refiner_share) layout >> v;
+        if (!layout) throw Error(path + ": its .refiner.txt needs the patch size, 136 mean-shape values and 68 shares");
+        cnn::PatchNet check(model.refiner_net, model.refiner_patch_size, 136, path);
+        std::printf("landmark refiner: %s, %d px, %zu bytes\n", path.c_str(), model.refiner_patch_size, model.refiner_net.size());
     }
     cnn::writeCnnModel(args.get("--out"), model);
     std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());

@@ -5,8 +5,9 @@ with three standardised inputs and torch's outputs as little-endian float32; and
 the same layers whose 136 outputs are constant, every point displaced by (+3, 0) patch pixels
 (cnn_landmarks_fixture.onnx, for the stage's landmark geometry); a stage whose update is constant,
 no pose change and +0.3 on its one expression (cnn_expression_fixture.onnx, for an expressions-only
-cascade); and the gaze stage's iris-net fixture
-(iris_net_fixture.onnx, below).
+cascade); a landmark refiner of train_refine.py's layers on a 32 px patch whose 136 offsets are
+constant, every point (+3, 0) patch pixels from the mean shape (refiner_fixture.onnx, for the
+refine stage's geometry); and the gaze stage's iris-net fixture (iris_net_fixture.onnx, below).
 
   /usr/bin/python3 tools/train_cnn/make_parity_fixture.py tests/data
 """
@@ -16,7 +17,9 @@ import numpy as np
 import torch
 
 sys.path.insert(0, os.path.dirname(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "train_refine"))
 from train_stage import Stage, export  # noqa: E402
+from train_refine import Refiner  # noqa: E402
 
 out = sys.argv[1] if len(sys.argv) > 1 else "tests/data"
 torch.manual_seed(3)
@@ -62,6 +65,15 @@ with torch.no_grad():
 expression.eval()
 export(expression, os.path.join(out, "cnn_expression_fixture.onnx"))
 print(f"wrote {out}/cnn_expression_fixture.onnx")
+
+refiner = Refiner(32, widths=(4, 8), strides=(2, 2), hidden=8)
+randomise_batchnorm(refiner)
+with torch.no_grad():
+    refiner.head[-1].weight.zero_()
+    refiner.head[-1].bias.copy_(torch.tensor([3.0, 0.0] * 68))
+torch.onnx.export(refiner.eval(), torch.zeros(1, 1, 32, 32), os.path.join(out, "refiner_fixture.onnx"), opset_version=13,
+                  input_names=["patch"], output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+print(f"wrote {out}/refiner_fixture.onnx")
 
 # The gaze stage's iris-net fixture (tests/test_gaze.cpp): 2 x 1 x 28 x 40 -> 2 x 3 x 14 x 20 like
 # tools/train_eyes/train_iris_net.py's nets, but each cell's scores come from its own patch pixel

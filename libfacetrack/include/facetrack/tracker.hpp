@@ -2,7 +2,7 @@
 /// \file
 /// The Tracker wires the stages into one pipeline:
 ///   frame -> detect (when fewer faces than wanted are followed) -> verify (now and then)
-///         -> per face: landmarks -> fit -> cnn -> gaze -> filter -> result
+///         -> per face: landmarks -> refine -> fit -> cnn -> gaze -> filter -> result
 /// docs/architecture.md shows the data flow. Stages not built yet report
 /// "not available" and leave their fields of FaceResult empty.
 ///
@@ -26,7 +26,7 @@ namespace facetrack {
 
 /// One entry of Tracker::stages(). The same names label FrameResult::timings.
 struct StageInfo {
-    std::string name;       ///< "detect", "verify", "landmarks", "fit", "cnn", "gaze", "filter"
+    std::string name;       ///< "detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter"
     bool available = false;
     std::string detail;     ///< what implements it, or why it is not available
 };

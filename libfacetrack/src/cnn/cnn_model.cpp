@@ -15,7 +15,19 @@ constexpr int kMaxStages = 8, kMaxRounds = 8;
 
 void validate(const CnnModelData& m, const std::string& what) {
     if (m.patch_size < 16 || m.patch_size > 256) throw Error(what + ": corrupt: patch size");
-    if (m.stages.empty() || m.stages.size() > kMaxStages) throw Error(what + ": corrupt: stage count");
+    const bool refiner = !m.refiner_net.empty();
+    if ((m.stages.empty() && !refiner) || m.stages.size() > kMaxStages) throw Error(what + ": corrupt: stage count");
+    if (m.stages.empty() && !m.landmark_net.empty()) throw Error(what + ": corrupt: a landmark net without stages");
+    if (refiner) {
+        if (m.refiner_patch_size < 16 || m.refiner_patch_size > 256) throw Error(what + ": corrupt: refiner patch size");
+        if (m.refiner_mean.size() != 136 || m.refiner_share.size() != 68) throw Error(what + ": corrupt: refiner shape");
+        for (const float v : m.refiner_mean) {
+            if (!(v >= 0.f && v <= m.refiner_patch_size)) throw Error(what + ": corrupt: refiner mean shape outside its patch");
+        }
+        for (const float v : m.refiner_share) {
+            if (!(v >= 0.f && v <= 1.f)) throw Error(what + ": corrupt: a refiner share outside [0, 1]");
+        }
+    }
     if (!m.neutral.empty() && m.neutral.size() != m.expressions.size()) throw Error(what + ": corrupt: neutral weights");
     if (!m.reported.empty() && m.reported.size() != m.expressions.size()) throw Error(what + ": corrupt: reported expressions");
     for (const float w : m.neutral) {
@@ -55,6 +67,10 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     for (const float v : m.neutral) w.put<float>(v);
     w.put<std::uint32_t>(static_cast<std::uint32_t>(m.reported.size()));
     for (const bool v : m.reported) w.put<std::uint8_t>(v ? 1 : 0);
+    w.putString(m.refiner_net);
+    w.put<std::int32_t>(m.refiner_patch_size);
+    for (const float v : m.refiner_mean) w.put<float>(v);
+    for (const float v : m.refiner_share) w.put<float>(v);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -93,6 +109,14 @@ CnnModelData readCnnModel(const std::string& path) {
             m.reported.push_back(flag == 1);
         }
     }
+    if (version >= 4) {
+        m.refiner_net = r.getString();
+        m.refiner_patch_size = r.get<std::int32_t>();
+        if (!m.refiner_net.empty()) {
+            for (int i = 0; i < 136; ++i) m.refiner_mean.push_back(r.get<float>());
+            for (int i = 0; i < 68; ++i) m.refiner_share.push_back(r.get<float>());
+        }
+    }
     r.expectEnd();
     validate(m, what);
     return m;
@@ -126,5 +150,9 @@ std::vector<int> CnnModel::rounds() const {
 bool CnnModel::hasLandmarkNet() const { return !data_->landmark_net.empty(); }
 
 bool CnnModel::expressionsOnly() const { return data_->expressions_only; }
+
+bool CnnModel::hasCascade() const { return !data_->stages.empty(); }
+
+bool CnnModel::hasRefiner() const { return !data_->refiner_net.empty(); }
 
 }  // namespace facetrack

@@ -32,10 +32,16 @@ struct CnnModelData {
     /// The final net, the 68 landmarks' displacements (landmark_net.hpp): ONNX bytes, or empty for none.
     std::string landmark_net;
     std::string provenance;
+    /// The landmark refiner (landmark_refiner.hpp; format version 4): ONNX bytes, or empty for none.
+    /// A file may hold it alone, without cascade stages.
+    std::string refiner_net;
+    int refiner_patch_size = 0;
+    std::vector<float> refiner_mean;   ///< 136: the mean shape in patch pixels, x0, y0, x1, ...
+    std::vector<float> refiner_share;  ///< 68: per landmark, the net's share of the answer, the rest LBF's
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 3;
+constexpr std::uint32_t kCnnModelVersion = 4;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

@@ -136,6 +136,7 @@ std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> ca
                                               const pipeline::Stage* fit) {
     if (!cascade) return pipeline::notAvailable("cnn", "no CNN cascade (" + CnnModel::defaultPath() + " not found)");
     if (!fit || !fit->info().available) return pipeline::notAvailable("cnn", "needs the fit stage's pose and expressions");
+    if (!cascade->hasCascade()) return pipeline::notAvailable("cnn", "'" + cascade->sourcePath() + "' has no cascade stages");
     return std::make_unique<CnnStage>(std::move(cascade), std::move(face), fit->estimatedExpressions());
 }
 

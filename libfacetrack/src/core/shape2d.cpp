@@ -40,12 +40,14 @@ Shape2 procrustesMean(const std::vector<Shape2>& shapes, int iterations) {
     return mean;
 }
 
-float nme68(const Shape2& predicted, const Shape2& truth) {
+Eigen::VectorXf pointErrors68(const Shape2& predicted, const Shape2& truth) {
     if (predicted.cols() != 68 || truth.cols() != 68) throw Error("nme68: shapes must have 68 points");
     const float interocular = (truth.col(36) - truth.col(45)).norm();
     if (!(interocular > 0.f)) throw Error("nme68: coincident eye corners");
-    return (predicted - truth).colwise().norm().mean() / interocular;
+    return (predicted - truth).colwise().norm().transpose() / interocular;
 }
+
+float nme68(const Shape2& predicted, const Shape2& truth) { return pointErrors68(predicted, truth).mean(); }
 
 float nmeBox(const Shape2& predicted, const Shape2& truth) {
     if (predicted.cols() != truth.cols() || truth.cols() == 0) throw Error("nmeBox: shapes must have the same, non-zero number of points");

@@ -62,6 +62,16 @@ inline float eyeCornerDistance(const Landmarks68& p) { return std::hypot(p[36].x
 /// distance (0-based points 36 and 45). Both shapes have 68 points.
 float nme68(const Shape2& predicted, const Shape2& truth);
 
+/// Each point's error over the outer-eye-corner distance: nme68 is their mean.
+Eigen::VectorXf pointErrors68(const Shape2& predicted, const Shape2& truth);
+
+/// The iBUG 68-point regions, first and one-past-last point.
+struct LandmarkRegion {
+    const char* name;
+    int first, end;
+};
+inline constexpr LandmarkRegion kRegions68[] = {{"jaw", 0, 17}, {"brows", 17, 27}, {"nose", 27, 36}, {"eyes", 36, 48}, {"mouth", 48, 68}};
+
 /// Box-normalised mean error (AFLW2000-3D, large poses, where the eye corners
 /// can coincide): mean point distance over sqrt(w h) of the truth's bounding box.
 float nmeBox(const Shape2& predicted, const Shape2& truth);

@@ -15,11 +15,6 @@ constexpr float kMaxOutsideShare = 0.25f;  // landmarks outside the frame
 constexpr float kMinEyeCornersPx = 8.f;
 constexpr double kMinFaceContrast = 4.0;   // grey-level standard deviation inside the landmarks' box
 
-Box boundsOf(const Shape68& shape) {
-    const Eigen::Vector2f lo = shape.rowwise().minCoeff(), hi = shape.rowwise().maxCoeff();
-    return {lo.x(), lo.y(), hi.x(), hi.y()};
-}
-
 /// A face has texture: on a covered lens or a blanked frame the regression
 /// still returns a plausible shape.
 bool hasTexture(const cv::Mat& gray, const Box& box) {

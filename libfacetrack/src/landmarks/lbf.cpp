@@ -101,6 +101,11 @@ Shape68 fromLandmarks68(const Landmarks68& points) {
     return shape;
 }
 
+Box boundsOf(const Shape68& shape) {
+    const Eigen::Vector2f lo = shape.rowwise().minCoeff(), hi = shape.rowwise().maxCoeff();
+    return {lo.x(), lo.y(), hi.x(), hi.y()};
+}
+
 Shape68 shapeFromBox(const LbfModel& model, const Box& box, const std::string& detector) {
     const BoxPrior* prior = &model.box_priors.front();
     for (const auto& p : model.box_priors) {

@@ -75,6 +75,9 @@ void checkStartCount(int starts, const std::string& what);
 Landmarks68 toLandmarks68(const Shape68& shape);
 Shape68 fromLandmarks68(const Landmarks68& points);
 
+/// The shape's bounding box.
+Box boundsOf(const Shape68& shape);
+
 /// The initial shape for a detector box: the model's box prior for that
 /// detector kind ("yunet", "cascade"), else its first prior.
 Shape68 shapeFromBox(const LbfModel& model, const Box& box, const std::string& detector);

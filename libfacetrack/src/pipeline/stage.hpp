@@ -4,7 +4,7 @@
 // stage reads what earlier stages wrote and writes its own fields
 // (docs/architecture.md, "Adding a stage").
 //
-//   frame ──> [landmarks] ──> [fit] ──> [cnn] ──> [gaze] ──> [filter] ──> FaceResult
+//   frame ──> [landmarks] ──> [refine] ──> [fit] ──> [cnn] ──> [gaze] ──> [filter] ──> FaceResult
 //                 ^              │
 //                 └─ next_start ─┘   (the fitted face's projection starts the next frame's search)
 

@@ -1,6 +1,7 @@
 #include "facetrack/tracker.hpp"
 
 #include "cnn/cnn_stage.hpp"
+#include "cnn/refine_stage.hpp"
 #include "core/environment.hpp"
 #include "facetrack/error.hpp"
 #include "filter/filter_stage.hpp"
@@ -35,7 +36,7 @@ Models Models::loadDefault() {
     if (std::filesystem::exists(cnn, ec)) {
         models.cnn = CnnModel::load(cnn);
     } else {
-        core::log("CNN cascade " + cnn + " not found: the cnn stage is not available");
+        core::log("CNN file " + cnn + " not found: the refine and cnn stages are not available");
     }
     return models;
 }
@@ -70,6 +71,7 @@ void validate(const Models& models, const TrackerConfig& config) {
 pipeline::StageList stageList(const Models& models, const TrackerConfig& config, const FaceDetector& detector) {
     pipeline::StageList stages;
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind(), config.landmark_starts));
+    stages.push_back(cnn::makeRefineStage(models.cnn, stages.back().get()));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}, models.landmarks != nullptr));
     stages.push_back(cnn::makeCnnStage(models.cnn, models.face, stages.back().get()));
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));

@@ -1,0 +1,52 @@
+#include "cnn/refine_stage.hpp"
+
+#include "cnn/cnn_model_data.hpp"
+#include "cnn/landmark_refiner.hpp"
+#include "cnn/patch_net.hpp"
+#include "landmarks/lbf.hpp"
+
+namespace facetrack::cnn {
+
+namespace {
+
+class RefineStage final : public pipeline::Stage {
+public:
+    explicit RefineStage(std::shared_ptr<const CnnModel> model)
+        : model_(std::move(model)),
+          layout_(makeRefinerLayout(model_->data().refiner_patch_size, model_->data().refiner_mean, model_->data().refiner_share)),
+          net_(model_->data().refiner_net, layout_.size, 2 * landmarks::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {}
+
+    StageInfo info() const override {
+        return {"refine", true, "CNN landmark refiner, " + std::to_string(layout_.size) + " px patch, mean share " +
+                                    std::to_string(layout_.share.mean()).substr(0, 4) + " (" + model_->sourcePath() + ")"};
+    }
+
+    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {
+        if (!face.result.landmarks) return true;
+        const landmarks::Shape68 lbf = landmarks::fromLandmarks68(*face.result.landmarks);
+        const core::Similarity toFrame = patchToFrame(layout_, lbf);
+        warpAligned(layout_, frame.gray, toFrame, patch_);
+        const landmarks::Shape68 refined = refinedLandmarks(layout_, toFrame, net_.predict(patch_), lbf);
+        if (!refined.allFinite()) return true;
+        face.result.landmarks = landmarks::toLandmarks68(refined);
+        face.locate(landmarks::boundsOf(refined));
+        return true;
+    }
+
+private:
+    std::shared_ptr<const CnnModel> model_;
+    RefinerLayout layout_;
+    PatchNet net_;
+    cv::Mat patch_;
+};
+
+}  // namespace
+
+std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model, const pipeline::Stage* landmarks) {
+    if (!landmarks || !landmarks->info().available) return pipeline::notAvailable("refine", "needs the landmarks stage's landmarks");
+    if (!model) return pipeline::notAvailable("refine", "no CNN file (" + CnnModel::defaultPath() + " not found)");
+    if (!model->hasRefiner()) return pipeline::notAvailable("refine", "'" + model->sourcePath() + "' has no landmark refiner");
+    return std::make_unique<RefineStage>(std::move(model));
+}
+
+}  // namespace facetrack::cnn

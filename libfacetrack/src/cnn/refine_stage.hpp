@@ -1,0 +1,21 @@
+#pragma once
+// The "refine" stage: the landmark refiner (landmark_refiner.hpp) moves the
+// landmarks stage's 68 landmarks, before the fit reads them.
+//
+// Reads and writes FaceResult::landmarks, and locates the face at their box.
+// Never loses a face: the landmarks stage's checks decide that; a non-finite
+// answer keeps LBF's landmarks.
+
+#include "pipeline/stage.hpp"
+
+#include "facetrack/cnn_model.hpp"
+
+#include <memory>
+
+namespace facetrack::cnn {
+
+/// `model` null or without a refiner (CnnModel::hasRefiner): the stage is not available; `landmarks`
+/// (the landmarks stage) null or not available also.
+std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model, const pipeline::Stage* landmarks);
+
+}  // namespace facetrack::cnn
