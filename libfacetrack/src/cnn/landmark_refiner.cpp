@@ -7,7 +7,9 @@
 namespace facetrack::cnn {
 
 RefinerLayout makeRefinerLayout(int size, const std::vector<float>& mean, const std::vector<float>& share) {
-    if (mean.size() != 2 * landmarks::kLandmarks || share.size() != landmarks::kLandmarks) throw Error("landmark refiner: a mean shape of 68 points and 68 shares");
+    if (mean.size() != 2 * landmarks::kLandmarks || share.size() != landmarks::kLandmarks) {
+        throw Error("landmark refiner: needs a mean shape of 68 points and 68 shares");
+    }
     RefinerLayout layout;
     layout.size = size;
     layout.mean = Eigen::Map<const landmarks::Shape68>(mean.data());
@@ -15,7 +17,9 @@ RefinerLayout makeRefinerLayout(int size, const std::vector<float>& mean, const 
     return layout;
 }
 
-core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shape68& lbf) { return core::alignSimilarity(layout.mean, lbf); }
+core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shape68& lbf) {
+    return core::alignSimilarity(layout.mean, lbf);
+}
 
 void warpAligned(const RefinerLayout& layout, const cv::Mat& gray, const core::Similarity& toFrame, cv::Mat& patch) {
     const Eigen::Matrix2f a = toFrame.linear();
