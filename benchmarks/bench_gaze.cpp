@@ -67,7 +67,7 @@ void BM_TrackingFrame640x480_d14(benchmark::State& state) {
     if (skipWithoutShared(state, frames.empty() ? cv::Mat() : frames[0])) return;
     Models models = benchModels();
     if (state.range(0) == 0) models.eyes = nullptr;
-    const std::string cascade = benchCascadePath();  // with FACETRACK_CNN_CASCADE: the frame with the cnn stage
+    const std::string cascade = benchCascadePath();  // the shipped CNN file or FACETRACK_CNN_CASCADE; a missing path: none
     models.cnn = cascade.empty() ? nullptr : CnnModel::load(cascade);
     Tracker tracker(models);
     FrameResult result;
@@ -79,7 +79,7 @@ void BM_TrackingFrame640x480_d14(benchmark::State& state) {
         tracker.process(core::viewOf(frames[index]), t / 30.0, result);
         ++t;
     }
-    state.SetLabel(std::string(state.range(0) ? "gaze on" : "gaze off") + (models.cnn ? ", cnn on" : ""));
+    state.SetLabel(std::string(state.range(0) ? "gaze on" : "gaze off") + (models.cnn ? ", CNN file on" : ""));
 }
 BENCHMARK(BM_TrackingFrame640x480_d14)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
