@@ -48,13 +48,24 @@ constexpr double kOff = 0.3;  // outer-eye-corner distances: a face this far off
 /// The teacher's eight points per frame of one clip (empty where it found no face).
 using TeacherTrack = std::vector<std::optional<std::array<Point2, kTeacherPoints.size()>>>;
 
-TeacherTrack teacherTrack(const dense::TeacherMeshes& meshes, const std::string& clip, std::size_t frames) {
-    std::map<std::string, int> rowOf;
-    for (int r = 0; r < meshes.rows(); ++r) rowOf.emplace(meshes.keys[r], r);
+/// The teacher's meshes with each key's row, read once for every clip.
+struct Teacher {
+    dense::TeacherMeshes meshes;
+    std::map<std::string, int> row_of;
+};
+
+Teacher readTeacher(const std::string& dir) {
+    Teacher t{dense::readTeacherMeshes(dir + "/clips_iris.jsonl", dir + "/clips_mesh.npy"), {}};
+    for (int r = 0; r < t.meshes.rows(); ++r) t.row_of.emplace(t.meshes.keys[static_cast<std::size_t>(r)], r);
+    return t;
+}
+
+TeacherTrack teacherTrack(const Teacher& teacher, const std::string& clip, std::size_t frames) {
+    const dense::TeacherMeshes& meshes = teacher.meshes;
     TeacherTrack out(frames);
     for (std::size_t f = 0; f < frames; ++f) {
-        const auto row = rowOf.find(tools::teacherKey(clip, static_cast<int>(f)));
-        if (row == rowOf.end() || !meshes.found[row->second]) continue;
+        const auto row = teacher.row_of.find(tools::teacherKey(clip, static_cast<int>(f)));
+        if (row == teacher.row_of.end() || !meshes.found[static_cast<std::size_t>(row->second)]) continue;
         const Eigen::Matrix2Xd mesh = meshes.points(row->second);
         auto& points = out[f].emplace();
         for (std::size_t i = 0; i < kTeacherPoints.size(); ++i) {
@@ -156,9 +167,9 @@ int runEvalTrack(const std::vector<std::string>& argv) {
 
     const std::string shared = core::sharedDirectory();
     const std::string teacherDir = shared + "/data/teacher";
-    std::optional<dense::TeacherMeshes> meshes;
+    std::optional<Teacher> meshes;
     if (!shared.empty() && std::filesystem::exists(teacherDir + "/clips_mesh.npy")) {
-        meshes = dense::readTeacherMeshes(teacherDir + "/clips_iris.jsonl", teacherDir + "/clips_mesh.npy");
+        meshes = readTeacher(teacherDir);
     } else {
         std::puts("(no ../shared/data/teacher: the teacher columns are left empty)");
     }

@@ -5,6 +5,7 @@
 #include "cnn/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
+#include "landmarks/lbf.hpp"
 
 #include <algorithm>
 #include <optional>
@@ -110,15 +111,9 @@ private:
                                              projectedLandmarks(landmark_basis_, s.landmark_identity_shape, frame.camera, s.params, s.landmark_slots),
                                              landmark_net_->predict(s.work.patch));
         if (!q.allFinite()) return;
-        Landmarks68& out = face.result.landmarks.emplace();
-        const float x0 = static_cast<float>(q(0, 0)), y0 = static_cast<float>(q(1, 0));
-        Box bounds{x0, y0, x0, y0};
-        for (int i = 0; i < model::kLandmarkCount; ++i) {
-            const float x = static_cast<float>(q(0, i)), y = static_cast<float>(q(1, i));
-            out[static_cast<std::size_t>(i)] = {x, y};
-            bounds = {std::min(bounds.x0, x), std::min(bounds.y0, y), std::max(bounds.x1, x), std::max(bounds.y1, y)};
-        }
-        face.locate(bounds);
+        const landmarks::Shape68 moved = q.cast<float>();
+        face.result.landmarks = landmarks::toLandmarks68(moved);
+        face.locate(landmarks::boundsOf(moved));
     }
 
     std::shared_ptr<const CnnModel> cascade_;

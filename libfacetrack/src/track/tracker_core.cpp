@@ -272,15 +272,18 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
         if (!tracks_.empty()) ensureGray();
         for (auto& t : tracks_) {
             runStages(input, t);
-            if (!t.lost && !t.fresh && !t.appearance.empty() && appearanceOf(gray_, t.box, appearance_)) {
-                if (alike(appearance_, t.appearance) < kAlike) t.doubtful = true;
-            }
+            bool seen = !t.lost && appearanceOf(gray_, t.box, appearance_);
+            if (seen && !t.fresh && !t.appearance.empty() && alike(appearance_, t.appearance) < kAlike) t.doubtful = true;
             // A face a stage doubts is checked now; one the detector sees elsewhere runs
             // again from there. Without a detection it stays (blur hides faces from it too).
             if (!t.lost && t.doubtful && !t.fresh && settings_.verify_interval > 0 && verify(t, false)) {
                 t.located = false;
                 runStages(input, t);
+                seen = !t.lost && appearanceOf(gray_, t.box, appearance_);
             }
+            // The next frame compares with this one (a swap: both buffers keep their memory).
+            if (seen) t.appearance.swap(appearance_);
+            else t.appearance.clear();
         }
         dropLost();
         // Every followed face was lost: look again in this very frame.
@@ -292,7 +295,6 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
     out.faces.resize(tracks_.size());
     for (std::size_t i = 0; i < tracks_.size(); ++i) {
         pipeline::FaceTrack& t = tracks_[i];
-        if (!appearanceOf(gray_, t.box, t.appearance)) t.appearance.clear();
         t.result.id = t.id;
         t.result.tracked = !t.fresh;
         t.result.box = t.box;
