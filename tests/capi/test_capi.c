@@ -45,7 +45,7 @@ static void checkErrorsAndNulls(const ft_models* models) {
     CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_ERROR && tracker == NULL);
     CHECK(strstr(error, "expression_prior") != NULL);
     ft_tracker_config_init(&config);
-    CHECK(config.landmark_starts == 5);
+    CHECK(config.landmark_starts == 3);
     config.landmark_starts = 10;
     CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_ERROR && tracker == NULL);
     CHECK(strstr(error, "landmark_starts") != NULL);

@@ -75,7 +75,7 @@ def mean_shape(shapes, size):
 class Refiner(torch.nn.Module):
     """SIZE x SIZE grey -> 136 offsets: stride-2 and stride-1 3x3 conv blocks (BatchNorm, ReLU), two linear layers."""
 
-    def __init__(self, size, widths=(16, 32, 32, 64, 64, 128, 128), strides=(2, 2, 1, 2, 1, 2, 1), hidden=256, dropout=0.0):
+    def __init__(self, size, widths=(8, 16, 32, 64, 128, 128), strides=(2, 2, 2, 2, 1, 2), hidden=256, dropout=0.0):
         super().__init__()
         layers, channels, side = [], 1, size
         for width, stride in zip(widths, strides):
@@ -225,8 +225,8 @@ def main():
     p.add_argument("--dropout", type=float, default=0.0, help="before the last layer")
     p.add_argument("--cutout", type=float, default=0.0, help="share of training patches with an occluding rectangle")
     p.add_argument("--weight-decay", type=float, default=1e-5, help="AdamW's")
-    p.add_argument("--widths", default="16,32,32,64,64,128,128", help="the conv blocks' channels")
-    p.add_argument("--strides", default="2,2,1,2,1,2,1", help="the conv blocks' strides")
+    p.add_argument("--widths", default="8,16,32,64,128,128", help="the conv blocks' channels")
+    p.add_argument("--strides", default="2,2,2,2,1,2", help="the conv blocks' strides")
     p.add_argument("--hidden", type=int, default=256, help="the hidden linear layer's width")
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args()

@@ -79,7 +79,7 @@ typedef struct ft_tracker_config {
     float filter_beta;            /* (2) */
     int32_t calibration_frames;   /* identity from this many samples; 0: mean face (30) */
     float expression_prior;       /* factor on the fit's learned expression prior, (0, 100] (1) */
-    int32_t landmark_starts;      /* landmark passes averaged, 1..9; each ~0.2 ms (5) */
+    int32_t landmark_starts;      /* landmark passes averaged, 1..9; each ~0.2 ms (3) */
 } ft_tracker_config;
 
 typedef struct ft_timing {

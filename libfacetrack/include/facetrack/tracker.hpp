@@ -96,8 +96,9 @@ struct TrackerConfig {
     /// The landmark regression runs from this many starts a few pixels apart
     /// and averages them, 1..9: each start costs one more landmark pass (about
     /// 0.2 ms on one core), and five jitter about half as much as one
-    /// (docs/landmarks.md).
-    int landmark_starts = 5;
+    /// (docs/landmarks.md). Three, because the landmark refiner after them
+    /// steadies the points too; without the CNN file five jitter less.
+    int landmark_starts = 3;
 };
 
 /// Throws Error naming the first field of `config` out of range, as the Tracker's
