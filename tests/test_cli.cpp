@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <cstdio>
+#include <regex>
 #include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -292,6 +293,43 @@ TEST(Cli, EvalGazeSeparatesTheFitsErrorFromTheGeometrysOnRenders) {
     for (const char* line : {"  all: mean ", "  tracked (", "head turning at 60 deg/s", "looking down 25 deg"})
         EXPECT_NE(run.out.find(line), std::string::npos) << line << "\n" << run.out;
     EXPECT_EQ(run.out.find("nan"), std::string::npos) << run.out;
+}
+
+TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {
+    FACETRACK_REQUIRE_SHARED();
+    // A large-pose set as make_profiled_faces writes one: grey PGM images, .pts, poses.csv.
+    const std::string dir = test::tempPath("profiled_set"), source = test::sharedDir() + "/data/faces300w/lfpw/testset/";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir + "/sub");
+    for (const char* name : {"image_0001", "image_0002"}) {
+        ASSERT_TRUE(cv::imwrite(dir + "/sub/" + name + ".pgm", cv::imread(source + name + ".jpg", cv::IMREAD_GRAYSCALE)));
+        std::filesystem::copy_file(source + name + ".pts", dir + "/sub/" + name + ".pts");
+    }
+    std::ofstream(dir + "/poses.csv") << "image,yaw_deg\nsub/image_0001.pgm,20.5\nsub/image_0002.pgm,-50\n";
+    const CliRun run = runCli("eval-landmarks '" + dir + "' --lbf-only --dlib none");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const auto table = run.out.find("by |yaw|");
+    ASSERT_NE(table, std::string::npos) << run.out;
+    std::istringstream rows(run.out.substr(table));
+    std::string line;
+    while (std::getline(rows, line) && line.rfind("facetrack LBF, 3 starts", 0) != 0) {}
+    // One face in 15-30 and one in 45-60 degrees; the other bins empty.
+    std::istringstream cells(std::regex_replace(line.substr(40), std::regex("\\( +"), "("));
+    std::vector<std::string> bins;
+    for (std::string cell; cells >> cell;) bins.push_back(cell);
+    ASSERT_EQ(bins.size(), 8u) << line;  // "-", "x.xx%", "(1)", "-", "y.yy%", "(1)", "-", "-"
+    EXPECT_EQ(bins[0], "-");
+    EXPECT_EQ(bins[2], "(1)");
+    EXPECT_EQ(bins[3], "-");
+    EXPECT_EQ(bins[5], "(1)");
+    EXPECT_EQ(bins[6], "-");
+    EXPECT_LT(std::stod(bins[1]), 6.0);  // frontal 300-W test faces: a few percent of the box
+
+    std::ofstream(dir + "/poses.csv") << "image,yaw_deg\nsub/image_0001.pgm,20.5\n";
+    const CliRun missing = runCli("eval-landmarks '" + dir + "' --lbf-only --dlib none");
+    EXPECT_EQ(missing.exit_code, 1);
+    EXPECT_NE(missing.err.find("image_0002.pgm' is not in"), std::string::npos) << missing.err;
+    std::filesystem::remove_all(dir);
 }
 
 TEST(Cli, LandmarksComeFromThePipelineWithACascadesLandmarkNetAndFromLbfWithLbfOnly) {

@@ -128,6 +128,25 @@ TEST(Fit, JawContourFollowsTheSilhouetteUnderYaw) {
     EXPECT_GE(moved, 5);
 }
 
+TEST(Fit, JawSilhouetteStaysBesideItsLandmarkAtEveryYaw) {
+    // A candidate path that wanders up the cheek or under the chin must not carry a jaw point there
+    // (face profiling carries the annotation with these points).
+    const Scene s;
+    fit::FaceParams p;
+    p.expression = Eigen::VectorXd::Zero(s.basis->expressionCount());
+    fit::ContourSlots fixed;
+    for (int i = 0; i < 17; ++i) fixed[i] = s.basis->landmark_slots[i];
+    for (double yaw = -75.0; yaw <= 75.0; yaw += 5.0) {
+        p.pose << fit::omegaFromEuler({0, yaw, 0}), 0, 0, 60;
+        const auto silhouette = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
+        const auto own = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fixed);
+        const double faceHeight = (own.col(8) - own.col(27)).norm();
+        for (int i = 0; i < 17; ++i) {
+            EXPECT_LT(std::abs(silhouette(1, i) - own(1, i)), 0.15 * faceHeight) << "jaw point " << i << " at yaw " << yaw;
+        }
+    }
+}
+
 struct FitErrors {
     std::vector<double> rotation_deg, translation_rel;
     Eigen::VectorXd expression_sq;

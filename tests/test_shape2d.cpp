@@ -1,4 +1,7 @@
+#include "core/pts.hpp"
 #include "core/shape2d.hpp"
+#include "facetrack/error.hpp"
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,6 +13,15 @@ namespace {
 Shape2 randomShape(int n, unsigned seed) {
     std::srand(seed);
     return Shape2::Random(2, n) * 50.f;
+}
+
+TEST(Pts, WrittenPointsReadBackAndABadFileIsAClearError) {
+    const Shape2 points = randomShape(68, 3) + Shape2::Constant(2, 68, 60.f);
+    const std::string path = test::tempPath("round_trip.pts");
+    writePts(path, points);
+    EXPECT_LT((readPts(path) - points).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_THROW(writePts("/nonexistent/dir/x.pts", points), Error);
+    EXPECT_THROW(readPts("/nonexistent/dir/x.pts"), Error);
 }
 
 TEST(Shape2d, AlignSimilarityRecoversAKnownTransform) {

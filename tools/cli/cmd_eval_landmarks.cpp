@@ -21,6 +21,9 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
+#include <numeric>
+#include <optional>
 
 namespace fs = std::filesystem;
 
@@ -52,15 +55,37 @@ outer-eye-corner distance), failure rate (NME > max error), AUC of the CED up to
 the max error, and ms per face, then the mean NME of each face region (jaw, brows,
 nose, eyes, mouth). --plot writes the CED curves as a PNG; --points-out writes every
 face's points, one CSV row per face and method (image, method, x0, y0, ..., x67, y67;
-the annotation's rows have method "annotation").)";
+the annotation's rows have method "annotation").
+When DIR holds a poses.csv (image path below DIR, yaw_deg), as the large-pose sets of
+build/tools/make_profiled_faces do, also the mean NME over sqrt(w h) of the annotation's
+box by 15-degree bin of |yaw| (the large-pose figure of docs/landmarks.md).)";
 
 using core::Shape2;
+
+constexpr std::size_t kYawBins = 6;  // |yaw| 0-15, ..., 75-90 deg
+
+/// DIR/poses.csv as {image path below DIR: yaw in degrees}; empty when there is none.
+std::map<std::string, double> readPoses(const std::string& dir) {
+    std::map<std::string, double> yaw;
+    std::ifstream in(dir + "/poses.csv");
+    if (!in) return yaw;
+    std::string line;
+    std::getline(in, line);
+    if (line != "image,yaw_deg") throw Error("'" + dir + "/poses.csv': expected the header image,yaw_deg");
+    while (std::getline(in, line)) {
+        const auto comma = line.rfind(',');
+        if (comma == std::string::npos) throw Error("'" + dir + "/poses.csv': malformed line '" + line + "'");
+        yaw[line.substr(0, comma)] = std::stod(line.substr(comma + 1));
+    }
+    return yaw;
+}
 
 /// One landmark method under evaluation.
 struct Method {
     std::string name;
     std::function<Shape2(const cv::Mat& bgr, const cv::Mat& gray, const Box& box)> fit;
     std::vector<double> nmes{};
+    std::array<std::vector<double>, kYawBins> box_nmes_by_yaw{};  ///< with poses.csv: per |yaw| bin, NME over sqrt(box)
     std::array<double, std::size(core::kRegions68)> region_sums{};  ///< per region, the sum over faces of its mean point error
     double ms = 0.0;
 
@@ -193,6 +218,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     config.yunet_model = args.get("--yunet");
     auto detector = createFaceDetector(config);
     const auto faces = args.has("--split") ? tools::list300W(dir, tools::parseSplit(args.get("--split"))) : tools::listAnnotated(dir);
+    const std::map<std::string, double> poses = args.has("--split") ? std::map<std::string, double>() : readPoses(dir);
 
     std::ofstream pointsOut;
     if (args.has("--points-out")) {
@@ -217,6 +243,12 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             continue;
         }
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+        std::optional<std::size_t> yawBin;
+        if (!poses.empty()) {
+            const auto pose = poses.find(fs::relative(faces[k].image, dir).string());
+            if (pose == poses.end()) throw Error("'" + faces[k].image + "' is not in " + dir + "/poses.csv");
+            yawBin = std::min(kYawBins - 1, static_cast<std::size_t>(std::abs(pose->second) / 15.0));
+        }
         if (pointsOut.is_open()) writePointsRow(pointsOut, faces[k].image, "annotation", truth);
         for (auto& m : methods) {
             const auto start = std::chrono::steady_clock::now();
@@ -224,6 +256,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             m.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
             const Eigen::VectorXf errors = core::pointErrors68(fitted, truth);
             m.nmes.push_back(errors.mean());
+            if (yawBin) m.box_nmes_by_yaw[*yawBin].push_back(core::nmeBox(fitted, truth));
             for (std::size_t r = 0; r < m.region_sums.size(); ++r) {
                 const auto& region = core::kRegions68[r];
                 m.region_sums[r] += errors.segment(region.first, region.end - region.first).mean();
@@ -256,6 +289,21 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         for (double sum : m.region_sums) std::printf(" %7.2f%%", 100 * sum / std::max<std::size_t>(1, m.nmes.size()));
     }
     std::putchar('\n');
+    if (!poses.empty()) {
+        std::printf("\nmean NME over sqrt(w h) of the annotation's box, by |yaw| (faces)\n%-40s", "method");
+        for (std::size_t b = 0; b < kYawBins; ++b) std::printf("  %2zu-%2zu deg     ", 15 * b, 15 * b + 15);
+        for (const auto& m : methods) {
+            std::printf("\n%-40s", m.name.c_str());
+            for (const auto& bin : m.box_nmes_by_yaw) {
+                if (bin.empty()) {
+                    std::printf("  %-14s", "-");
+                } else {
+                    std::printf("  %6.2f%% (%4zu)", 100.0 * std::accumulate(bin.begin(), bin.end(), 0.0) / static_cast<double>(bin.size()), bin.size());
+                }
+            }
+        }
+        std::putchar('\n');
+    }
     if (pointsOut.is_open()) std::printf("points: %s\n", args.get("--points-out").c_str());
     if (args.has("--plot")) {
         writeCedPlot(args.get("--plot"), curves, maxError,

@@ -67,7 +67,7 @@ std::vector<AnnotatedImage> listAnnotated(const std::string& dir) {
     std::vector<AnnotatedImage> out;
     for (const auto& entry : fs::recursive_directory_iterator(dir)) {
         const auto ext = entry.path().extension();
-        if (ext != ".jpg" && ext != ".png" && ext != ".jpeg") continue;
+        if (ext != ".jpg" && ext != ".png" && ext != ".jpeg" && ext != ".pgm") continue;
         const fs::path pts = fs::path(entry.path()).replace_extension(".pts");
         if (!fs::exists(pts)) continue;
         out.push_back({entry.path().string(), pts.string(), fs::relative(entry.path().parent_path(), dir).string()});

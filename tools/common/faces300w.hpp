@@ -33,7 +33,7 @@ std::string faces300wRoot(const std::string& given);  ///< "train", "validation"
 /// folder is missing or the split is empty.
 std::vector<AnnotatedImage> list300W(const std::string& root, Split split);
 
-/// Every image with a .pts beside it, below dir (any folder of annotated faces).
+/// Every image (.jpg, .jpeg, .png, .pgm) with a .pts beside it, below dir (any folder of annotated faces).
 std::vector<AnnotatedImage> listAnnotated(const std::string& dir);
 
 /// Whether a detector box is this annotated face: it contains the points'

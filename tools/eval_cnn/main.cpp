@@ -109,6 +109,11 @@ int run(int argc, char** argv) {
     const auto model = FaceModel::loadDefault();  // the shipped tracker's: with the landmark convention
     const auto cascade = CnnModel::load(args.get("--cascade", CnnModel::defaultPath()));
     const cnn::CnnModelData& data = cascade->data();
+    if (data.stages.empty()) {
+        throw Error("'" + args.get("--cascade", CnnModel::defaultPath()) +
+                    "' has no cascade stages (a landmark refiner alone): for its landmarks, large poses included, use "
+                    "`facetrack eval-landmarks` on 300-W and on build/tools/make_profiled_faces's sets");
+    }
     const std::vector<int> expressionIds = cnn::expressionIndices(model->expressionNames(), data.expressions);
     const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), expressionIds, data.patch_size);
     std::vector<cnn::PatchNet> nets;

@@ -3,8 +3,8 @@
     /usr/bin/python3 tools/train_refine/load_faces.py ../shared/data/faces300w build/refine/faces.npz
 
 Decodes every crop of index.csv with the ffmpeg command-line tool (no image library in Debian's
-python3 set we use) into one 256 x 256 uint8 array per face, top-left aligned (crops smaller than
-256 px are zero-padded), with its size.
+python3 set we use; binary PGM, as make_profiled_faces writes, directly) into one 256 x 256 uint8
+array per face, top-left aligned (crops smaller than 256 px are zero-padded), with its size.
 """
 import csv
 import subprocess
@@ -14,8 +14,11 @@ import numpy as np
 
 
 def decode_gray(path):
-    pgm = subprocess.run(["ffmpeg", "-v", "error", "-i", path, "-f", "image2pipe", "-vcodec", "pgm", "-pix_fmt", "gray", "-"],
-                         check=True, capture_output=True).stdout
+    if path.endswith(".pgm"):  # binary PGM (make_profiled_faces writes it): read as it is
+        pgm = open(path, "rb").read()
+    else:
+        pgm = subprocess.run(["ffmpeg", "-v", "error", "-i", path, "-f", "image2pipe", "-vcodec", "pgm", "-pix_fmt", "gray", "-"],
+                             check=True, capture_output=True).stdout
     fields, pos = [], 0
     while len(fields) < 4:  # "P5" width height maxval, whitespace separated
         while pgm[pos:pos + 1].isspace():

@@ -35,4 +35,13 @@ Shape2 readPts(const std::string& path) {
     return Eigen::Map<const Shape2>(points.data(), 2, static_cast<Eigen::Index>(count));
 }
 
+void writePts(const std::string& path, const Shape2& points) {
+    std::ofstream out(path);
+    out << "version: 1\nn_points: " << points.cols() << "\n{\n";
+    out.precision(7);
+    for (Eigen::Index i = 0; i < points.cols(); ++i) out << points(0, i) + 1.f << ' ' << points(1, i) + 1.f << '\n';
+    out << "}\n";
+    if (!out) throw Error("cannot write landmark file '" + path + "'");
+}
+
 }  // namespace facetrack::core

@@ -67,13 +67,18 @@ ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& 
     const Eigen::Matrix3d rotation = rotationOf(pose.head<3>());
     auto projected = [&](const Eigen::Vector3d& p) { return camera.project<double>(rotation * p + pose.tail<3>()); };
     ContourSlots chosen{};
+    // Some candidate paths wander along the outline, up the cheek or under the chin; those vertices
+    // would win on reach and put a jaw point a jaw's height from its place.
+    constexpr double kBandCm = 1.5;
     for (int i = 0; i < kJaw; ++i) {
         const Eigen::Vector3d own = x.col(basis.landmark_slots[i]);
         const Eigen::Vector2d origin = projected(own);
         const Eigen::Vector2d outward = (projected(own + basis.contour_outward[i]) - origin).normalized();
+        const Eigen::Vector3d along = basis.contour_outward[i].cross(Eigen::Vector3d::UnitZ());  // the outline's direction, in the model
         chosen[i] = basis.landmark_slots[i];
         double best = -std::numeric_limits<double>::infinity();
         for (const int slot : basis.contour_slots[i]) {
+            if (std::abs((x.col(slot) - own).dot(along)) > kBandCm) continue;
             const double reach = (projected(x.col(slot)) - origin).dot(outward);
             if (reach > best) {
                 best = reach;

@@ -68,7 +68,9 @@ Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const
 /// projection reaches furthest along the image direction of the landmark's
 /// outward axis (FitBasis::contour_outward). A path swept across the jaw
 /// reaches that extreme where it turns out of view. This is how a rendered
-/// face's jaw landmarks fall (the synthetic tests use it).
+/// face's jaw landmarks fall (the synthetic tests and face profiling use it).
+/// Candidates more than 1.5 cm from the landmark along the outline (the model's
+/// y for the sides, x for the chin) are left out: they lie off the path.
 ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose);
 
 /// For each jaw landmark, the candidate whose projection is nearest the
