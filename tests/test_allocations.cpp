@@ -101,7 +101,7 @@ TEST(Allocations, WithTheRefinerOnlyItsNetAllocates) {
     // One run of the refiner as the stage makes it (the aligned patch, the net, the blend) on a
     // frame of the clip, with the mean shape as LBF's points.
     const cnn::CnnModelData& d = models.cnn->data();
-    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(d.refiner_patch_size, d.refiner_mean, d.refiner_share);
+    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(d);
     cnn::PatchNet net(d.refiner_net, layout.size, 136, "refiner");
     cv::Mat gray, patch;
     cv::cvtColor(test::clipFrames(1)[0], gray, cv::COLOR_BGR2GRAY);

@@ -355,6 +355,14 @@ TEST(CnnModelFile, HoldsALandmarkRefinerAloneOrBesideACascade) {
     EXPECT_EQ(alone->data().refiner_net, refinerOnly(0.6f).refiner_net);
     EXPECT_EQ(alone->data().refiner_mean, refinerOnly(0.6f).refiner_mean);
     EXPECT_EQ(alone->data().refiner_share, refinerOnly(0.6f).refiner_share);
+    EXPECT_EQ(alone->data().refiner_trust_to, 0.f);
+    cnn::CnnModelData ramped = refinerOnly(0.6f);
+    ramped.refiner_trust_from = 0.03f, ramped.refiner_trust_to = 0.045f;
+    cnn::writeCnnModel(path, ramped);
+    EXPECT_EQ(CnnModel::load(path)->data().refiner_trust_from, 0.03f);
+    EXPECT_EQ(CnnModel::load(path)->data().refiner_trust_to, 0.045f);
+    ramped.refiner_trust_to = 2.f;  // a disagreement of twice the face's size: corrupt
+    EXPECT_THROW(cnn::writeCnnModel(path, ramped), Error);
     cnn::CnnModelData both = parityCascade();
     const cnn::CnnModelData refiner = refinerOnly(0.6f);
     both.refiner_net = refiner.refiner_net;
@@ -382,7 +390,7 @@ TEST(CnnModelFile, HoldsALandmarkRefinerAloneOrBesideACascade) {
 
 TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
     const cnn::CnnModelData m = refinerOnly(1.f);
-    cnn::RefinerLayout layout = cnn::makeRefinerLayout(32, m.refiner_mean, m.refiner_share);
+    cnn::RefinerLayout layout = cnn::makeRefinerLayout(m);
     // LBF's points: the mean shape scaled 1.5x, turned 10 degrees and moved.
     core::Similarity placed;
     placed.scale = 1.5f;
@@ -410,6 +418,20 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
     EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + shift)).cwiseAbs().maxCoeff(), 1e-3f);
     layout.share.setConstant(0.25f);  // a quarter of the way from LBF's points to the net's
     EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.25f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
+
+    // The trust ramp: the net and LBF disagree by D = |shift| / sqrt(w h) of LBF's box.
+    const Eigen::Array2f extent = lbf.rowwise().maxCoeff().array() - lbf.rowwise().minCoeff().array();
+    const float disagreement = shift.norm() / std::sqrt(extent.x() * extent.y());
+    layout.trust_from = 0.f;
+    layout.trust_to = 2.f * disagreement;  // g = 0.5: w' = 0.25 + 0.5 (1 - 0.25)
+    EXPECT_NEAR(cnn::netTrust(layout, lbf.colwise() + shift, lbf), 0.5f, 1e-4f);
+    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.625f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    layout.trust_to = 0.5f * disagreement;  // past the ramp: the net alone
+    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    layout.trust_from = 1.5f * disagreement, layout.trust_to = 3.f * disagreement;  // below it: the shares
+    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.25f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    layout.trust_from = layout.trust_to = 0.f;  // no ramp (a version-4 file)
+    EXPECT_EQ(cnn::netTrust(layout, lbf.colwise() + 100.f * shift, lbf), 0.f);
 }
 
 TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
@@ -439,7 +461,7 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     EXPECT_FALSE(find("cnn").available);
     EXPECT_NE(find("cnn").detail.find("has no cascade stages"), std::string::npos) << find("cnn").detail;
 
-    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(32, m.refiner_mean, m.refiner_share);
+    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(m);
     FrameResult lbfOut, out;
     int checked = 0;
     for (const cv::Mat& frame : test::clipFrames(3)) {
@@ -474,7 +496,7 @@ TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
     const auto model = CnnModel::load(path);
     ASSERT_TRUE(model->hasRefiner());
     const cnn::CnnModelData& d = model->data();
-    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(d.refiner_patch_size, d.refiner_mean, d.refiner_share);
+    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(d);
     cnn::PatchNet net(d.refiner_net, layout.size, 136, "the shipped refiner");
     const auto lbf = LandmarkModel::loadDefault();
     DetectorConfig config;
@@ -500,7 +522,7 @@ TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
     }
     ASSERT_GE(count, 40);
     std::printf("on %d lfpw test faces: LBF %.2f%%, refined %.2f%%\n", count, 100 * lbfSum / count, 100 * refinedSum / count);
-    EXPECT_LT(refinedSum, 0.98 * lbfSum);  // 0.96 when it was shipped
+    EXPECT_LT(refinedSum, 0.98 * lbfSum);  // 0.89 with session 21's net (4.76 -> 4.25 % on 55 faces)
 }
 
 }  // namespace

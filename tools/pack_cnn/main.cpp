@@ -6,8 +6,8 @@
 //                        [--refiner build/refine/net.onnx] --out build/cnn/cascade.ftm [--provenance "..."]
 //
 // --refiner: the landmark refiner of tools/train_refine/train_refine.py (cnn/landmark_refiner.hpp),
-// with its NET.refiner.txt beside it (the patch size, the 136 mean-shape values, the 68 shares);
-// with it --nets may be left out.
+// with its NET.refiner.txt beside it (the patch size, the 136 mean-shape values, the 68 shares and,
+// when the trainer chose them, the trust ramp D0 D1); with it --nets may be left out.
 //
 // --expressions-only: the nets were trained to read expressions (train_stage.py --expressions);
 // the stage keeps the fit's pose and the shapes the fit estimates (cnn_model_data.hpp).
@@ -181,8 +181,11 @@ int run(int argc, char** argv) {
         for (float& v : model.refiner_mean) layout >> v;
         for (float& v : model.refiner_share) layout >> v;
         if (!layout) throw Error(path + ": its .refiner.txt needs the patch size, 136 mean-shape values and 68 shares");
+        float from = 0.f, to = 0.f;
+        if (layout >> from >> to) model.refiner_trust_from = from, model.refiner_trust_to = to;
         cnn::PatchNet check(model.refiner_net, model.refiner_patch_size, 136, path);
-        std::printf("landmark refiner: %s, %d px, %zu bytes\n", path.c_str(), model.refiner_patch_size, model.refiner_net.size());
+        std::printf("landmark refiner: %s, %d px, %zu bytes, trust ramp %.3f-%.3f\n", path.c_str(), model.refiner_patch_size,
+                    model.refiner_net.size(), model.refiner_trust_from, model.refiner_trust_to);
     }
     cnn::writeCnnModel(args.get("--out"), model);
     std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());

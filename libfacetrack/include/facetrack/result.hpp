@@ -101,7 +101,8 @@ struct FaceResult {
     std::optional<ExpressionResult> expression;
     std::optional<GazeResult> gaze;
     /// RMS distance between the landmarks and the fitted face's projection, in
-    /// outer-eye-corner distances (the fit's confidence signal; lower is better).
+    /// outer-eye-corner distances, or half the landmarks' box size, sqrt(w h),
+    /// where that is larger (a face turned far) (the fit's confidence signal; lower is better).
     std::optional<float> fit_residual;
     /// Identity coefficients of the fitted face (FaceModel::vertices); empty
     /// before calibration, i.e. the mean face.

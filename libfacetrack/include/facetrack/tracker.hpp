@@ -84,7 +84,7 @@ struct TrackerConfig {
     /// id. Catches a tracker that sticks to background after the face left,
     /// or to the side of a head that moved fast. 0: never.
     int verify_interval = 30;
-    /// A fit residual above this (eye-corner distances) drops the face and re-detects.
+    /// A fit residual above this (eye-corner distances; FaceResult::fit_residual) drops the face and re-detects.
     float max_fit_residual = 0.12f;
     /// Estimate the user's identity from this many well-fitted frames (one
     /// taken every 5 frames), then freeze it. 0: keep the mean face.

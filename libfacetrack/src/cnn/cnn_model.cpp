@@ -27,6 +27,9 @@ void validate(const CnnModelData& m, const std::string& what) {
         for (const float v : m.refiner_share) {
             if (!(v >= 0.f && v <= 1.f)) throw Error(what + ": corrupt: a refiner share outside [0, 1]");
         }
+        if (!(m.refiner_trust_from >= 0.f && m.refiner_trust_to >= 0.f && m.refiner_trust_to <= 1.f)) {
+            throw Error(what + ": corrupt: the refiner's trust ramp");
+        }
     }
     if (!m.neutral.empty() && m.neutral.size() != m.expressions.size()) throw Error(what + ": corrupt: neutral weights");
     if (!m.reported.empty() && m.reported.size() != m.expressions.size()) throw Error(what + ": corrupt: reported expressions");
@@ -71,6 +74,8 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     w.put<std::int32_t>(m.refiner_patch_size);
     for (const float v : m.refiner_mean) w.put<float>(v);
     for (const float v : m.refiner_share) w.put<float>(v);
+    w.put<float>(m.refiner_trust_from);
+    w.put<float>(m.refiner_trust_to);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -116,6 +121,10 @@ CnnModelData readCnnModel(const std::string& path) {
             for (int i = 0; i < 136; ++i) m.refiner_mean.push_back(r.get<float>());
             for (int i = 0; i < 68; ++i) m.refiner_share.push_back(r.get<float>());
         }
+    }
+    if (version >= 5) {
+        m.refiner_trust_from = r.get<float>();
+        m.refiner_trust_to = r.get<float>();
     }
     r.expectEnd();
     validate(m, what);

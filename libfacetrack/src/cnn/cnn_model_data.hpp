@@ -38,10 +38,13 @@ struct CnnModelData {
     int refiner_patch_size = 0;
     std::vector<float> refiner_mean;   ///< 136: the mean shape in patch pixels, x0, y0, x1, ...
     std::vector<float> refiner_share;  ///< 68: per landmark, the net's share of the answer, the rest LBF's
+    /// Where the net takes the whole answer as it disagrees with LBF (landmark_refiner.hpp: D0, D1;
+    /// format version 5). D1 <= D0, as in older files: never.
+    float refiner_trust_from = 0.f, refiner_trust_to = 0.f;
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 4;
+constexpr std::uint32_t kCnnModelVersion = 5;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

@@ -4,17 +4,30 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
+
 namespace facetrack::cnn {
 
-RefinerLayout makeRefinerLayout(int size, const std::vector<float>& mean, const std::vector<float>& share) {
-    if (mean.size() != 2 * landmarks::kLandmarks || share.size() != landmarks::kLandmarks) {
+RefinerLayout makeRefinerLayout(const CnnModelData& data) {
+    if (data.refiner_mean.size() != 2 * landmarks::kLandmarks || data.refiner_share.size() != landmarks::kLandmarks) {
         throw Error("landmark refiner: needs a mean shape of 68 points and 68 shares");
     }
     RefinerLayout layout;
-    layout.size = size;
-    layout.mean = Eigen::Map<const landmarks::Shape68>(mean.data());
-    layout.share = Eigen::Map<const Eigen::Array<float, 1, 68>>(share.data());
+    layout.size = data.refiner_patch_size;
+    layout.mean = Eigen::Map<const landmarks::Shape68>(data.refiner_mean.data());
+    layout.share = Eigen::Map<const Eigen::Array<float, 1, 68>>(data.refiner_share.data());
+    layout.trust_from = data.refiner_trust_from;
+    layout.trust_to = data.refiner_trust_to;
     return layout;
+}
+
+float netTrust(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf) {
+    if (!(layout.trust_to > layout.trust_from)) return 0.f;
+    const Eigen::Array2f extent = lbf.rowwise().maxCoeff().array() - lbf.rowwise().minCoeff().array();
+    const float size = std::sqrt(std::max(extent.x() * extent.y(), 1e-6f));
+    const float disagreement = (net - lbf).colwise().norm().mean() / size;
+    return std::clamp((disagreement - layout.trust_from) / (layout.trust_to - layout.trust_from), 0.f, 1.f);
 }
 
 core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shape68& lbf) {
@@ -31,7 +44,8 @@ landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Sim
                                     const landmarks::Shape68& lbf) {
     const landmarks::Shape68 inPatch = layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 68>>(d.data()).cast<float>();
     const landmarks::Shape68 net = toFrame.apply(inPatch);
-    return (net.array().rowwise() * layout.share + lbf.array().rowwise() * (1.f - layout.share)).matrix();
+    const Eigen::Array<float, 1, 68> share = layout.share + netTrust(layout, net, lbf) * (1.f - layout.share);
+    return (net.array().rowwise() * share + lbf.array().rowwise() * (1.f - share)).matrix();
 }
 
 }  // namespace facetrack::cnn

@@ -9,10 +9,15 @@
 // lie in the patch, as offsets from the mean shape, d (136 values:
 // x_0, y_0, ..., patch pixels); back in the frame p_i = A (m_i + d_i) + t. The
 // answer blends the two estimates,
-//   q_i = w_i p_i + (1 - w_i) l_i,
+//   q_i = w'_i p_i + (1 - w'_i) l_i,   w'_i = w_i + g (1 - w_i),
 // with w_i the net's share, chosen per face region on the validation split:
-// the net and LBF err differently, and their blend beats either.
+// the net and LBF err differently, and their blend beats either. g trusts the
+// net alone where it disagrees with LBF by much: with D the mean |p_i - l_i|
+// over sqrt(w h) of LBF's box, g = clamp((D - D0) / (D1 - D0), 0, 1) (0 when
+// D1 <= D0). LBF fails on faces turned far, and a net trained on such faces
+// (face profiling) does not: a wide disagreement is LBF's error (docs/cnn.md).
 
+#include "cnn/cnn_model_data.hpp"
 #include "core/shape2d.hpp"
 #include "landmarks/lbf_model.hpp"
 
@@ -27,10 +32,14 @@ struct RefinerLayout {
     int size = 0;                       ///< the patch's side, pixels
     landmarks::Shape68 mean;            ///< m above
     Eigen::Array<float, 1, 68> share;  ///< w above
+    float trust_from = 0.f, trust_to = 0.f;  ///< D0, D1 above
 };
 
-/// The layout a model file stores (cnn_model_data.hpp: 136 mean values, 68 shares).
-RefinerLayout makeRefinerLayout(int size, const std::vector<float>& mean, const std::vector<float>& share);
+/// The layout a model file stores (cnn_model_data.hpp: patch size, 136 mean values, 68 shares, D0, D1).
+RefinerLayout makeRefinerLayout(const CnnModelData& data);
+
+/// g above: how far the net alone is trusted, in [0, 1].
+float netTrust(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf);
 
 /// x -> A x + t above, patch pixels to frame pixels.
 core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shape68& lbf);

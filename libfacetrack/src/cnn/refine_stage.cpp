@@ -13,12 +13,15 @@ class RefineStage final : public pipeline::Stage {
 public:
     explicit RefineStage(std::shared_ptr<const CnnModel> model)
         : model_(std::move(model)),
-          layout_(makeRefinerLayout(model_->data().refiner_patch_size, model_->data().refiner_mean, model_->data().refiner_share)),
+          layout_(makeRefinerLayout(model_->data())),
           net_(model_->data().refiner_net, layout_.size, 2 * landmarks::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {}
 
     StageInfo info() const override {
+        const std::string trust = layout_.trust_to > layout_.trust_from
+                                      ? ", alone where it disagrees with LBF by " + std::to_string(100.f * layout_.trust_to).substr(0, 3) + " %"
+                                      : "";
         return {"refine", true, "CNN landmark refiner, " + std::to_string(layout_.size) + " px patch, mean share " +
-                                    std::to_string(layout_.share.mean()).substr(0, 4) + " (" + model_->sourcePath() + ")"};
+                                    std::to_string(layout_.share.mean()).substr(0, 4) + trust + " (" + model_->sourcePath() + ")"};
     }
 
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {

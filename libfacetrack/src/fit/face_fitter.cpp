@@ -2,6 +2,7 @@
 
 #include "facetrack/error.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -44,6 +45,11 @@ Eigen::Matrix<double, 6, 1> poseTemporalWeights(const FitSettings& s) {
 }  // namespace
 
 double eyeCornerDistance(const Landmarks2d& points) { return (points.col(36) - points.col(45)).norm(); }
+
+double faceScale(const Landmarks2d& points) {
+    const Eigen::Vector2d extent = points.rowwise().maxCoeff() - points.rowwise().minCoeff();
+    return std::max({eyeCornerDistance(points), 0.5 * std::sqrt(extent.x() * extent.y()), 1.0});
+}
 
 void slotPositions(const PointBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x) {
     x = base;
@@ -268,7 +274,7 @@ FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, Fac
     if (!observed.allFinite()) return report;
     camera_ = camera;
     observed_ = observed;
-    scale_ = std::max(eyeCornerDistance(observed), 1.0);
+    scale_ = faceScale(observed);
     if (!warm || params.expression.size() != basis_->expressionCount()) {
         params = initialParams(observed);
         warm = false;
@@ -317,7 +323,7 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
     for (std::size_t f = 0; f < frames.size(); ++f) {
         auto& frame = frames[f];
         if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
-        scales[f] = std::max(eyeCornerDistance(frame.observed), 1.0);
+        scales[f] = faceScale(frame.observed);
         auto* cost = new PointsCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber},
                                      landmarkSlots(basis), true);
         for (int i = 0; i < kJaw; ++i) cost->setSlot(i, frame.contour[i]);

@@ -7,7 +7,7 @@
 //        + w_l2 sum_j f_j b_j^2 + w_t |b - b_prev|^2 + |W_p (p - p_prev)|^2,   b in [0, 1]
 //
 // over the pose p = (omega, t) and expression b, with u_i the landmarks, s the
-// eye-corner distance in pixels, rho a Huber loss, f_j the learned prior's
+// face's size in pixels (faceScale), rho a Huber loss, f_j the learned prior's
 // factors (FitBasis::expression_prior; 1 without one). The 17 jaw landmarks are not
 // tied to fixed vertices: each is matched to the silhouette vertex among its
 // contour candidates (nearestContour), re-chosen as the pose changes.
@@ -29,7 +29,7 @@ using Landmarks2d = Eigen::Matrix<double, 2, model::kLandmarkCount>;
 using ContourSlots = std::array<int, model::kContourLandmarkCount>;
 
 struct FitSettings {
-    double huber = 0.05;                ///< robust loss scale, in eye-corner distances
+    double huber = 0.05;                ///< robust loss scale, in face sizes (faceScale)
     double expression_l2 = 1e-3;        ///< w_l2 (TrackerConfig::expression_prior scales it)
     double expression_temporal = 5e-3;  ///< w_t
     double rotation_temporal = 1e-3;    ///< per rad^2
@@ -40,7 +40,7 @@ struct FitSettings {
 };
 
 struct FitReport {
-    double residual = 0.0;  ///< RMS landmark distance after the fit, in eye-corner distances
+    double residual = 0.0;  ///< RMS landmark distance after the fit, in face sizes (faceScale)
     ContourSlots contour{};
     Landmarks2d projected = Landmarks2d::Zero();  ///< the fitted face's landmarks (pixels)
     int iterations = 0;
@@ -53,6 +53,12 @@ ceres::Solver::Options solverOptions(int iterations, ceres::LinearSolverType sol
 
 /// Outer-eye-corner distance (points 36 and 45), the 300-W face size.
 double eyeCornerDistance(const Landmarks2d& points);
+
+/// s above: the eye-corner distance, but at least half of sqrt(w h) of the
+/// points' box (and 1 px). Turned past ~45 deg the eye corners close up (the
+/// ratio falls from 0.5-0.7 on 300-W's faces to 0.2-0.4), and the residual in
+/// their distance would drop a well-fitted face.
+double faceScale(const Landmarks2d& points);
 
 using Pose6 = Eigen::Matrix<double, 6, 1>;  ///< (omega, t) as in FaceParams
 
