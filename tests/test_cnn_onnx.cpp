@@ -6,6 +6,7 @@
 #include "cnn/cnn_model_data.hpp"
 #include "cnn/landmark_net.hpp"
 #include "cnn/landmark_refiner.hpp"
+#include "cnn/refine_stage.hpp"
 #include "cnn/update_net.hpp"
 #include "core/image.hpp"
 #include "core/pts.hpp"
@@ -432,6 +433,40 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
     EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.25f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
     layout.trust_from = layout.trust_to = 0.f;  // no ramp (a version-4 file)
     EXPECT_EQ(cnn::netTrust(layout, lbf.colwise() + 100.f * shift, lbf), 0.f);
+}
+
+TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFrames) {
+    // The fixture moves every point by (+3, 0) patch pixels, so the net and LBF disagree alike on
+    // every frame; a ramp below that disagreement trusts the net alone on any one frame (g = 1).
+    cnn::CnnModelData m = refinerOnly(0.25f);
+    m.refiner_trust_from = 0.f, m.refiner_trust_to = 1e-4f;
+    const std::string path = test::tempPath("refiner_trust.ftm");
+    cnn::writeCnnModel(path, m);
+    struct Landmarks final : pipeline::Stage {  // stands in for the landmarks stage the refiner needs
+        StageInfo info() const override { return {"landmarks", true, "given"}; }
+        bool run(const pipeline::FrameInput&, pipeline::FaceTrack&, pipeline::StageState*) override { return true; }
+    } landmarks;
+    const auto stage = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
+    ASSERT_TRUE(stage->info().available) << stage->info().detail;
+    const auto state = stage->newFaceState();
+    const cv::Mat gray(160, 160, CV_8U, cv::Scalar(128));
+    const pipeline::FrameInput frame{ImageView{gray.data, gray.cols, gray.rows, gray.step, PixelFormat::Gray8}, gray,
+                                     fit::cameraFor(gray.cols, gray.rows, 60.0, 0.0), 1.0 / 30.0};
+    core::Similarity placed;  // LBF's points: the mean shape twice as large, in the frame
+    placed.scale = 2.f;
+    placed.translation = Eigen::Vector2f(40.f, 30.f);
+    const landmarks::Shape68 lbf = placed.apply(cnn::makeRefinerLayout(m).mean);
+    const auto shareOfTheNet = [&](bool fresh) {
+        pipeline::FaceTrack face;
+        face.fresh = fresh;
+        face.result.landmarks = landmarks::toLandmarks68(lbf);
+        EXPECT_TRUE(stage->run(frame, face, state.get()));
+        return ((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f;  // the net's shift: 3 patch px x 2
+    };
+    // g_t = (1 + g_{t-1}) / 2 from the state's 0: w' = 0.25 + g 0.75.
+    EXPECT_NEAR(shareOfTheNet(false), 0.25f + 0.5f * 0.75f, 1e-3f);
+    EXPECT_NEAR(shareOfTheNet(false), 0.25f + 0.75f * 0.75f, 1e-3f);
+    EXPECT_NEAR(shareOfTheNet(true), 1.f, 1e-3f);  // a face found again: this frame's alone
 }
 
 TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {

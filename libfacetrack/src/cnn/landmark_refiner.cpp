@@ -40,12 +40,19 @@ void warpAligned(const RefinerLayout& layout, const cv::Mat& gray, const core::S
     cv::warpAffine(gray, patch, frameOf, cv::Size(layout.size, layout.size), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
 }
 
+landmarks::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d) {
+    return toFrame.apply(layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 68>>(d.data()).cast<float>());
+}
+
+landmarks::Shape68 blendedLandmarks(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf, float trust) {
+    const Eigen::Array<float, 1, 68> share = layout.share + trust * (1.f - layout.share);
+    return (net.array().rowwise() * share + lbf.array().rowwise() * (1.f - share)).matrix();
+}
+
 landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,
                                     const landmarks::Shape68& lbf) {
-    const landmarks::Shape68 inPatch = layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 68>>(d.data()).cast<float>();
-    const landmarks::Shape68 net = toFrame.apply(inPatch);
-    const Eigen::Array<float, 1, 68> share = layout.share + netTrust(layout, net, lbf) * (1.f - layout.share);
-    return (net.array().rowwise() * share + lbf.array().rowwise() * (1.f - share)).matrix();
+    const landmarks::Shape68 net = netLandmarks(layout, toFrame, d);
+    return blendedLandmarks(layout, net, lbf, netTrust(layout, net, lbf));
 }
 
 }  // namespace facetrack::cnn

@@ -16,6 +16,9 @@
 // over sqrt(w h) of LBF's box, g = clamp((D - D0) / (D1 - D0), 0, 1) (0 when
 // D1 <= D0). LBF fails on faces turned far, and a net trained on such faces
 // (face profiling) does not: a wide disagreement is LBF's error (docs/cnn.md).
+// While a face is followed, the refine stage averages g over frames,
+// g_t = (g + g_{t-1}) / 2: a disagreement hovering in the ramp would otherwise
+// switch the answer between blends from frame to frame (jitter).
 
 #include "cnn/cnn_model_data.hpp"
 #include "core/shape2d.hpp"
@@ -47,7 +50,13 @@ core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shap
 /// P above, into `patch` (8-bit grey, size x size; reused).
 void warpAligned(const RefinerLayout& layout, const cv::Mat& gray, const core::Similarity& toFrame, cv::Mat& patch);
 
-/// q above from the net's outputs d.
+/// The net's points p above from its outputs d.
+landmarks::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d);
+
+/// q above, with the trust g.
+landmarks::Shape68 blendedLandmarks(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf, float trust);
+
+/// q above from the net's outputs d, g from this face alone (a still image).
 landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,
                                     const landmarks::Shape68& lbf);
 

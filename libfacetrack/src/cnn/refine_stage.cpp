@@ -9,6 +9,11 @@ namespace facetrack::cnn {
 
 namespace {
 
+/// Per face: the trust g of the previous frame, averaged into this one's (landmark_refiner.hpp).
+struct RefineFaceState final : pipeline::StageState {
+    float trust = 0.f;
+};
+
 class RefineStage final : public pipeline::Stage {
 public:
     explicit RefineStage(std::shared_ptr<const CnnModel> model)
@@ -24,13 +29,19 @@ public:
                                     std::to_string(layout_.share.mean()).substr(0, 4) + trust + " (" + model_->sourcePath() + ")"};
     }
 
-    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {
+    std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<RefineFaceState>(); }
+
+    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         if (!face.result.landmarks) return true;
         const landmarks::Shape68 lbf = landmarks::fromLandmarks68(*face.result.landmarks);
         const core::Similarity toFrame = patchToFrame(layout_, lbf);
         warpAligned(layout_, frame.gray, toFrame, patch_);
-        const landmarks::Shape68 refined = refinedLandmarks(layout_, toFrame, net_.predict(patch_), lbf);
-        if (!refined.allFinite()) return true;
+        const landmarks::Shape68 net = netLandmarks(layout_, toFrame, net_.predict(patch_));
+        if (!net.allFinite()) return true;
+        float& trust = static_cast<RefineFaceState&>(*state).trust;
+        const float now = netTrust(layout_, net, lbf);
+        trust = face.fresh ? now : 0.5f * (now + trust);
+        const landmarks::Shape68 refined = blendedLandmarks(layout_, net, lbf, trust);
         face.result.landmarks = landmarks::toLandmarks68(refined);
         face.locate(landmarks::boundsOf(refined));
         return true;
