@@ -17,6 +17,8 @@
 
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -74,8 +76,12 @@ std::map<std::string, double> readPoses(const std::string& dir) {
     if (line != "image,yaw_deg") throw Error("'" + dir + "/poses.csv': expected the header image,yaw_deg");
     while (std::getline(in, line)) {
         const auto comma = line.rfind(',');
-        if (comma == std::string::npos) throw Error("'" + dir + "/poses.csv': malformed line '" + line + "'");
-        yaw[line.substr(0, comma)] = std::stod(line.substr(comma + 1));
+        char* end = nullptr;
+        const double deg = comma == std::string::npos ? 0.0 : std::strtod(line.c_str() + comma + 1, &end);
+        if (comma == std::string::npos || end == line.c_str() + comma + 1 || !std::isfinite(deg)) {
+            throw Error("'" + dir + "/poses.csv': malformed line '" + line + "'");
+        }
+        yaw[line.substr(0, comma)] = deg;
     }
     return yaw;
 }

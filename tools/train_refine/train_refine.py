@@ -254,11 +254,9 @@ class Validation:
         self.sets = [(val, point_errors)] + ([(profiled, box_errors)] if profiled else [])
         self.lbf = [errors(faces.lbf, faces.truth).mean() for faces, errors in self.sets]
 
-    def score(self, refined, share=1.0):
-        """refined: per set, the net's points; share: the net's, per landmark (68) or overall."""
-        w = np.broadcast_to(np.asarray(share, np.float64), (68,))[:, None]
-        return sum(errors(w * r + (1 - w) * faces.lbf, faces.truth).mean() / l
-                   for (faces, errors), r, l in zip(self.sets, refined, self.lbf))
+    def score(self, refined):
+        """refined: per set, the net's points alone."""
+        return sum(errors(r, faces.truth).mean() / l for (faces, errors), r, l in zip(self.sets, refined, self.lbf))
 
 
 def report(name, errors):
