@@ -332,6 +332,35 @@ TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {
     std::filesystem::remove_all(dir);
 }
 
+TEST(Cli, EvalLandmarksFollowsEachFolderAsAClipWithSequences) {
+    FACETRACK_REQUIRE_SHARED();
+    // Two clips of a still face, four frames each: the tracker finds each face itself and follows it.
+    const std::string dir = test::tempPath("sequences_set"), source = test::sharedDir() + "/data/faces300w/lfpw/testset/";
+    std::filesystem::remove_all(dir);
+    std::ofstream poses;
+    for (const char* name : {"image_0001", "image_0002"}) {
+        const std::string clip = dir + "/" + name;
+        std::filesystem::create_directories(clip);
+        for (int f = 0; f < 4; ++f) {
+            const std::string frame = clip + "/000" + std::to_string(f);
+            ASSERT_TRUE(cv::imwrite(frame + ".png", cv::imread(source + name + ".jpg", cv::IMREAD_COLOR)));
+            std::filesystem::copy_file(source + name + ".pts", frame + ".pts");
+        }
+    }
+    const CliRun run = runCli("eval-landmarks '" + dir + "' --sequences --lbf-only --dlib none");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const std::string key = "followed through each folder's frames (--sequences): ";
+    const auto at = run.out.find(key);
+    ASSERT_NE(at, std::string::npos) << run.out;
+    const std::string summary = run.out.substr(at + key.size(), run.out.find('\n', at) - at - key.size());
+    EXPECT_EQ(summary.rfind("8 frames", 0), 0u) << summary;
+    EXPECT_NE(summary.find("no face on 0 (0.0 %)"), std::string::npos) << summary;
+    const auto nme = summary.find("box NME ");
+    ASSERT_NE(nme, std::string::npos) << summary;
+    EXPECT_LT(std::stod(summary.substr(nme + 8)), 6.0) << summary;  // frontal 300-W test faces: a few percent of the box
+    std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, LandmarksComeFromThePipelineWithACascadesLandmarkNetAndFromLbfWithLbfOnly) {
     FACETRACK_REQUIRE_SHARED();
     // The cascade of the export fixtures: a random stage and a landmark net moving every point

@@ -169,5 +169,34 @@ TEST(FaceProfiling, TurnedFaceCarriesThePhotographsTextureAlong) {
     EXPECT_THROW(profile::profileFace(*s.model, cv::Mat(), s.camera, identity, {}, photographed, turned), Error);
 }
 
+TEST(FaceProfiling, TurnSequenceGoesOutByTheStepAndComesBack) {
+    const auto& s = scene();
+    const cv::Mat photo = smoothTexture(320, 240, 7);
+    const fit::FaceParams photographed = faceAt({0.0, 30.0, 0.0}, {0.0, 0.0, 100.0}, 0);
+    const std::vector<float> identity(static_cast<std::size_t>(s.model->identityCount()), 0.f);
+    const auto frames = profile::turnSequence(*s.model, photo, s.camera, identity, {}, photographed, 10.0);
+    std::vector<double> yaws;
+    for (const auto& f : frames) {
+        yaws.push_back(fit::eulerDegrees(f.label.omega()).y());
+        EXPECT_EQ(f.image.size(), photo.size());
+    }
+    ASSERT_GE(yaws.size(), 5u);
+    EXPECT_NEAR(yaws.front(), 30.0, 0.5);
+    EXPECT_NEAR(yaws.back(), 30.0, 0.5);
+    // Out the way it looks, 10 degrees a frame, as far as the head stays 85 % seen (at most 80), and back the same way.
+    const auto far = std::max_element(yaws.begin(), yaws.end());
+    EXPECT_GE(*far, 40.0 - 0.5);
+    const auto hiddenAt = [&](double yaw) {
+        return profile::profileFace(*s.model, photo, s.camera, identity, {}, photographed, profile::turnedBy(photographed, yaw - 30.0)).hidden_share;
+    };
+    EXPECT_LE(hiddenAt(*far), 0.15);
+    if (*far + 10.0 <= 80.0) {
+        EXPECT_GT(hiddenAt(*far + 10.0), 0.15);
+    }
+    for (auto y = yaws.begin(); y + 1 != yaws.end(); ++y) EXPECT_NEAR(std::abs(*(y + 1) - *y), 10.0, 0.5) << y - yaws.begin();
+    for (auto up = yaws.begin(), down = far + (far - yaws.begin()); up != far; ++up, --down) EXPECT_NEAR(*up, *down, 1e-6);
+    EXPECT_THROW(profile::turnSequence(*s.model, photo, s.camera, identity, {}, photographed, 0.1), Error);
+}
+
 }  // namespace
 }  // namespace facetrack

@@ -36,7 +36,7 @@ namespace {
 const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
                                 [--cascade FILE] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
                                 [--plot ced.png] [--max-error 0.08] [--landmark-starts N]
-                                [--tracked-frames N] [--points-out FILE.csv]
+                                [--tracked-frames N] [--points-out FILE.csv] [--sequences]
 Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
 YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
 root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
@@ -60,7 +60,12 @@ face's points, one CSV row per face and method (image, method, x0, y0, ..., x67,
 the annotation's rows have method "annotation").
 When DIR holds a poses.csv (image path below DIR, yaw_deg), as the large-pose sets of
 build/tools/make_profiled_faces do, also the mean NME over sqrt(w h) of the annotation's
-box by 15-degree bin of |yaw| (the large-pose figure of docs/landmarks.md).)";
+box by 15-degree bin of |yaw| (the large-pose figure of docs/landmarks.md).
+--sequences: each folder's images, in name order, are also a clip at 30 fps (as
+make_profiled_faces --turn-clips writes head turns): the tracker, as a video application
+runs it (its own detector until it finds the face, then tracking mode; no filter), follows
+the face through it. Adds, over every frame (with poses.csv, by |yaw| bin): the share of
+frames where it follows no face, and the box NME where it does.)";
 
 using core::Shape2;
 
@@ -168,6 +173,13 @@ Method dlibShapePredictor(const std::string& path, bool seenInTraining) {
             }};
 }
 
+/// --sequences: the tracker following each clip's face, per |yaw| bin (all frames in bin 0 without poses.csv).
+struct FollowedFrames {
+    std::array<int, kYawBins> frames{}, without_face{};
+    std::array<std::vector<double>, kYawBins> box_nmes{};
+    double ms = 0.0;
+};
+
 void writePointsRow(std::ofstream& out, const std::string& image, const std::string& method, const Shape2& points) {
     out << '"' << image << "\",\"" << method << '"';  // quoted: method names have commas
     for (int i = 0; i < points.cols(); ++i) out << ',' << points(0, i) << ',' << points(1, i);
@@ -179,7 +191,7 @@ void writePointsRow(std::ofstream& out, const std::string& image, const std::str
 int runEvalLandmarks(const std::vector<std::string>& argv) {
     const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts",
                                  "--tracked-frames", "--points-out"},
-                    {"--help", "--lbf-only"});
+                    {"--help", "--lbf-only", "--sequences"});
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -236,6 +248,9 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         pointsOut.precision(7);
     }
 
+    const bool sequences = args.has("--sequences");
+    FollowedFrames followed;
+    std::array<int, kYawBins> missedByYaw{};
     int missed = 0;
     cv::Mat gray;
     for (std::size_t k = 0; k < faces.size(); ++k) {
@@ -243,18 +258,29 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         if (bgr.empty()) throw Error("cannot read image '" + faces[k].image + "'");
         const Shape2 truth = core::readPts(faces[k].pts);
         if (truth.cols() != 68) throw Error("'" + faces[k].pts + "' does not have 68 points");
-        const auto box = tools::matchingBox(detector->detect(tools::viewOf(bgr)), truth);
-        if (!box) {
-            ++missed;
-            continue;
-        }
-        cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
         std::optional<std::size_t> yawBin;
         if (!poses.empty()) {
             const auto pose = poses.find(fs::relative(faces[k].image, dir).string());
             if (pose == poses.end()) throw Error("'" + faces[k].image + "' is not in " + dir + "/poses.csv");
             yawBin = std::min(kYawBins - 1, static_cast<std::size_t>(std::abs(pose->second) / 15.0));
         }
+        if (sequences) {  // every frame, with or without a YuNet box: the tracker does not need one
+            const bool newClip = k == 0 || faces[k].subset != faces[k - 1].subset;
+            const auto start = std::chrono::steady_clock::now();
+            const std::optional<Landmarks68> points = pipeline->followed(bgr, newClip);
+            followed.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+            const std::size_t bin = yawBin.value_or(0);
+            ++followed.frames[bin];
+            if (points) followed.box_nmes[bin].push_back(core::nmeBox(Shape2(landmarks::fromLandmarks68(*points)), truth));
+            else ++followed.without_face[bin];
+        }
+        const auto box = tools::matchingBox(detector->detect(tools::viewOf(bgr)), truth);
+        if (!box) {
+            ++missed;
+            ++missedByYaw[yawBin.value_or(0)];
+            continue;
+        }
+        cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
         if (pointsOut.is_open()) writePointsRow(pointsOut, faces[k].image, "annotation", truth);
         for (auto& m : methods) {
             const auto start = std::chrono::steady_clock::now();
@@ -308,7 +334,29 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
                 }
             }
         }
+        std::printf("\n%-40s", "frames without a YuNet box (left out)");
+        for (int n : missedByYaw) std::printf("  %-14d", n);
         std::putchar('\n');
+    }
+    if (sequences) {
+        const int frames = std::accumulate(followed.frames.begin(), followed.frames.end(), 0);
+        const int without = std::accumulate(followed.without_face.begin(), followed.without_face.end(), 0);
+        std::vector<double> all;
+        for (const auto& bin : followed.box_nmes) all.insert(all.end(), bin.begin(), bin.end());
+        std::printf("\n%s followed through each folder's frames (--sequences): %d frames, %.2f ms a frame, no face on %d (%.1f %%),"
+                    " box NME %.2f %% where it follows one\n",
+                    pipeline->method().c_str(), frames, followed.ms / std::max(1, frames), without, 100.0 * without / std::max(1, frames),
+                    all.empty() ? 0.0 : 100.0 * std::accumulate(all.begin(), all.end(), 0.0) / static_cast<double>(all.size()));
+        if (!poses.empty()) {
+            std::printf("%-40s", "by |yaw|: box NME (frames followed)");
+            for (const auto& bin : followed.box_nmes) {
+                if (bin.empty()) std::printf("  %-14s", "-");
+                else std::printf("  %6.2f%% (%4zu)", 100.0 * std::accumulate(bin.begin(), bin.end(), 0.0) / static_cast<double>(bin.size()), bin.size());
+            }
+            std::printf("\n%-40s", "by |yaw|: frames without a face");
+            for (std::size_t b = 0; b < kYawBins; ++b) std::printf("  %-14s", (std::to_string(followed.without_face[b]) + " of " + std::to_string(followed.frames[b])).c_str());
+            std::putchar('\n');
+        }
     }
     if (pointsOut.is_open()) std::printf("points: %s\n", args.get("--points-out").c_str());
     if (args.has("--plot")) {

@@ -10,6 +10,11 @@ namespace facetrack::cli {
 StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
                                const std::string& boxPrior, int starts)
     : lbf_(std::move(lbf)), method_("facetrack LBF"), box_prior_(boxPrior), starts_(starts) {
+    config_.filter.enabled = false;
+    config_.max_faces = 1;
+    config_.landmark_starts = starts;
+    config_.detector.kind = boxPrior == "cascade" ? DetectorKind::Cascade : DetectorKind::YuNet;  // its kind picks LBF's box prior
+    models_.landmarks = lbf_;
     if (lbfOnly) return;
     std::error_code ec;
     const std::string path = cascadePath.empty() ? CnnModel::defaultPath() : cascadePath;
@@ -20,12 +25,24 @@ StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const s
         return;
     }
     method_ = std::string("facetrack LBF") + (cascade->hasRefiner() ? " + refiner" : "") + (cascade->hasLandmarkNet() ? " + fit + CNN" : "");
-    TrackerConfig still;
-    still.filter.enabled = false;
-    still.max_faces = 1;
-    still.landmark_starts = starts;
-    still.detector.kind = boxPrior == "cascade" ? DetectorKind::Cascade : DetectorKind::YuNet;  // its kind picks LBF's box prior
-    tracker_ = std::make_unique<Tracker>(Models{FaceModel::loadDefault(), lbf_, nullptr, std::move(cascade)}, still);
+    models_.face = FaceModel::loadDefault();
+    models_.cnn = std::move(cascade);
+    tracker_ = std::make_unique<Tracker>(models_, config_);
+}
+
+std::optional<Landmarks68> StillLandmarks::followed(const cv::Mat& bgr, bool newClip) {
+    if (!follower_) {
+        if (!models_.face) models_.face = FaceModel::loadDefault();
+        follower_ = std::make_unique<Tracker>(models_, config_);
+    }
+    if (newClip) {
+        follower_->reset();
+        follower_time_ = 0.0;
+    }
+    follower_->process(tools::viewOf(bgr), follower_time_, result_);
+    follower_time_ += 1.0 / 30.0;
+    if (result_.faces.empty() || !result_.faces[0].landmarks) return std::nullopt;
+    return *result_.faces[0].landmarks;
 }
 
 Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Box& box, bool* dropped) {

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace facetrack::cli {
@@ -30,9 +31,18 @@ public:
     /// pipeline drops the face (its fit does not hold), LBF's; `dropped` says so.
     Landmarks68 of(const cv::Mat& bgr, const cv::Mat& gray, const Box& box, bool* dropped = nullptr);
 
+    /// The same stages as a video application runs them: `bgr` is the next
+    /// frame of a clip at 30 fps (the first of a new one when `newClip`), the
+    /// tracker's own detector finds the face and tracking mode follows it (no
+    /// filter). Its landmarks, or none on a frame where it follows no face.
+    std::optional<Landmarks68> followed(const cv::Mat& bgr, bool newClip);
+
 private:
     std::shared_ptr<const LandmarkModel> lbf_;
-    std::unique_ptr<Tracker> tracker_;
+    Models models_;
+    TrackerConfig config_;
+    std::unique_ptr<Tracker> tracker_, follower_;
+    double follower_time_ = 0.0;
     FrameResult result_;
     std::string method_, box_prior_;
     int starts_;

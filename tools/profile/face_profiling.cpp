@@ -153,6 +153,30 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
     return copies;
 }
 
+std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+                                       const std::vector<float>& identity, const std::vector<float>& expression,
+                                       const fit::FaceParams& label, double stepDeg) {
+    constexpr double kMaxHidden = 0.15, kMaxYawDeg = 80.0;
+    if (!(stepDeg >= 0.5 && stepDeg <= 20.0)) throw Error("turnSequence: the step must be in [0.5, 20] degrees");
+    const double yaw = fit::eulerDegrees(label.omega()).y();
+    std::vector<ProfiledCopy> frames;
+    frames.push_back({profileFace(model, source, camera, identity, expression, label, label).image, label});
+    for (const double side : {1.0, -1.0}) {
+        std::vector<ProfiledCopy> out;  // the leg away from y0; it comes back the same way
+        for (double turn = stepDeg; side * yaw + turn <= kMaxYawDeg; turn += stepDeg) {
+            const fit::FaceParams turned = turnedBy(label, side * turn);
+            ProfiledFace face = profileFace(model, source, camera, identity, expression, label, turned);
+            if (face.hidden_share > kMaxHidden) break;
+            out.push_back({std::move(face.image), turned});
+        }
+        if (out.empty()) continue;
+        frames.insert(frames.end(), out.begin(), out.end());
+        for (auto back = out.rbegin() + 1; back != out.rend(); ++back) frames.push_back(*back);
+        frames.push_back(frames.front());
+    }
+    return frames;
+}
+
 std::vector<float> nativeWeights(const FaceModel& model, const std::vector<int>& ids, const Eigen::VectorXd& weights) {
     std::vector<float> native(model.expressionNames().size(), 0.f);
     for (std::size_t k = 0; k < ids.size() && k < static_cast<std::size_t>(weights.size()); ++k)

@@ -61,6 +61,16 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
                                          const std::vector<float>& identity, const std::vector<float>& expression,
                                          const fit::FaceParams& label, int tries, std::mt19937& rng);
 
+/// A head turn as a clip: the photograph at yaw y0 turned, `stepDeg` a frame,
+/// to +80 deg and back to y0, then to -80 deg and back. Each leg stops at its
+/// last frame whose head is at most 15 % hidden surface (turning a face back
+/// across the front soon hides too much: such a face turns one way only).
+/// The first frame is the photograph's own pose. Throws Error unless stepDeg is
+/// in [0.5, 20].
+std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+                                       const std::vector<float>& identity, const std::vector<float>& expression,
+                                       const fit::FaceParams& label, double stepDeg);
+
 /// Native expression weights (FaceModel::expressionNames() order) from weights
 /// of the expressions `ids` (indices into those names); the others 0.
 std::vector<float> nativeWeights(const FaceModel& model, const std::vector<int>& ids, const Eigen::VectorXd& weights);
