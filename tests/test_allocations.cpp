@@ -88,7 +88,8 @@ TEST(Allocations, NonePerTrackedFrameAfterWarmUp) {
 }
 
 // With the shipped CNN file, a tracked frame allocates exactly what one run of the refiner does
-// (OpenCV's dnn and warpAffine), and nothing else (docs/architecture.md: own kernels would remove it).
+// (OpenCV's dnn and warpAffine), or two where the stage runs its second round, and nothing else
+// (docs/architecture.md: own kernels would remove it).
 // On one OpenCV thread: with a pool, what a run allocates depends on which worker joined it and
 // whether that worker had run the net before (CI saw 130 against 127 in one process).
 TEST(Allocations, WithTheRefinerOnlyItsNetAllocates) {
@@ -117,8 +118,13 @@ TEST(Allocations, WithTheRefinerOnlyItsNetAllocates) {
     }
     long verifyFrames = 0, allocationsElsewhere = 0;
     const std::vector<long> tracked = trackedFrameAllocations(models, verifyFrames, allocationsElsewhere);
-    for (std::size_t i = 0; i < tracked.size(); ++i) EXPECT_EQ(tracked[i], perRun) << "tracked frame " << i;
-    std::printf("%zu tracked frames, each %ld allocations: one run of the refiner (cv::dnn, cv::warpAffine)\n", tracked.size(), perRun);
+    int twice = 0;
+    for (std::size_t i = 0; i < tracked.size(); ++i) {
+        EXPECT_TRUE(tracked[i] == perRun || tracked[i] == 2 * perRun) << "tracked frame " << i << ": " << tracked[i];
+        twice += tracked[i] == 2 * perRun;
+    }
+    std::printf("%zu tracked frames, each %ld allocations: one run of the refiner (cv::dnn, cv::warpAffine); %d with a second\n",
+                tracked.size(), perRun, twice);
     EXPECT_GT(tracked.size(), 120u);
     cv::setNumThreads(threads);
 }

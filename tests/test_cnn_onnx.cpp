@@ -435,7 +435,7 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
     EXPECT_EQ(cnn::netTrust(layout, lbf.colwise() + 100.f * shift, lbf), 0.f);
 }
 
-TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFrames) {
+TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrustsTheNet) {
     // The fixture moves every point by (+3, 0) patch pixels, so the net and LBF disagree alike on
     // every frame; a ramp below that disagreement trusts the net alone on any one frame (g = 1).
     cnn::CnnModelData m = refinerOnly(0.25f);
@@ -463,10 +463,26 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFrames) {
         EXPECT_TRUE(stage->run(frame, face, state.get()));
         return ((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f;  // the net's shift: 3 patch px x 2
     };
-    // g_t = (1 + g_{t-1}) / 2 from the state's 0: w' = 0.25 + g 0.75.
-    EXPECT_NEAR(shareOfTheNet(false), 0.25f + 0.5f * 0.75f, 1e-3f);
-    EXPECT_NEAR(shareOfTheNet(false), 0.25f + 0.75f * 0.75f, 1e-3f);
-    EXPECT_NEAR(shareOfTheNet(true), 1.f, 1e-3f);  // a face found again: this frame's alone
+    // g_t = (1 + g_{t-1}) / 2 from the state's 0: w' = 0.25 + g 0.75. With g > 0 a second round
+    // aligns the patch on the first answer, w' shifts from LBF's points, and shifts it once more:
+    // w' (1 + w') shifts in all.
+    const auto twoRounds = [](float g) {
+        const float w = 0.25f + g * 0.75f;
+        return w * (1.f + w);
+    };
+    EXPECT_NEAR(shareOfTheNet(false), twoRounds(0.5f), 1e-3f);
+    EXPECT_NEAR(shareOfTheNet(false), twoRounds(0.75f), 1e-3f);
+    EXPECT_NEAR(shareOfTheNet(true), twoRounds(1.f), 1e-3f);  // a face found again: this frame's alone
+
+    // A ramp beyond the disagreement (g = 0): one round, the net's share alone.
+    m.refiner_trust_from = 0.5f, m.refiner_trust_to = 0.6f;
+    cnn::writeCnnModel(path, m);
+    const auto untrusting = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
+    pipeline::FaceTrack face;
+    face.fresh = true;
+    face.result.landmarks = landmarks::toLandmarks68(lbf);
+    EXPECT_TRUE(untrusting->run(frame, face, untrusting->newFaceState().get()));
+    EXPECT_NEAR(((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f, 0.25f, 1e-3f);
 }
 
 TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {

@@ -298,6 +298,29 @@ TEST_F(StageRunner, AFaceInDoubtIsCheckedAndRestartsWhereTheDetectorSeesIt) {
     EXPECT_EQ(r.faces[0].box.x0, 35.f);
 }
 
+// The detection 8 px (0.2 of the 40 px box) across from the face: a periodic check lets it be (a
+// turned face's box and YuNet's differ by that much), a check of a face in doubt restarts it.
+TEST_F(StageRunner, AFaceInDoubtMustAgreeWithTheDetectorMoreCloselyThanAPeriodicCheck) {
+    build({"a"}, 8);
+    for (int i = 0; i < 8; ++i) step();  // the stage moves the face a pixel a frame: 28..68 after frame 7
+    FrameResult r = step();              // frame 8: checked now and then, kept
+    EXPECT_EQ(names(r), (std::vector<std::string>{"verify", "a"}));
+    EXPECT_TRUE(r.faces.at(0).tracked);
+    EXPECT_EQ(r.faces[0].box.x0, 29.f);
+
+    fakes.clear();
+    build({"a"}, 30);
+    fakes[0]->doubt_on = {2};
+    frame = 0;
+    step();                        // 21..61
+    step();                        // 22..62
+    fakes[0]->doubt_jump = 5.f;    // frame 2: the stage moves it to 28..68 and doubts it
+    r = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));  // run again from the detection
+    EXPECT_FALSE(r.faces.at(0).tracked);
+    EXPECT_EQ(r.faces[0].box.x0, 21.f);
+}
+
 TEST_F(StageRunner, NullStagesAndDetectorsAreRefused) {
     pipeline::StageList withNull;
     withNull.push_back(nullptr);

@@ -46,7 +46,7 @@ Methods, side by side with the same boxes:
                            cnn_cascade.ftm, which has the refiner alone; --lbf-only leaves them
                            out); a face whose fit does not hold keeps LBF's landmarks ("dropped")
   facetrack LBF, N starts  --model (default: the shipped landmarks_lbf.ftm) from --landmark-starts N
-                           starts, averaged (default 5, the tracker's), and from one start
+                           starts, averaged (default 3, the tracker's), and from one start
   facetrack tracked        --tracked-frames N: the tracker (LBF + fit, no CNN, no filter) given the
                            box on the first of N copies of the image, the landmarks of the last:
                            tracking mode, where each frame's LBF starts from the previous fit

@@ -35,7 +35,7 @@ temporal filtering. docs/api.md gives the axis conventions.
 --overlay writes a video with the mesh wireframe, landmarks and head axes drawn in.
 Tracker options: --max-faces N, --fov DEG (default 60), --focal PX, --calibration-frames N (0: mean face),
   --expression-prior F (factor on the fit's learned expression prior, default 1; below 1 expressions
-  respond more), --landmark-starts N (landmark passes averaged, 1..9, default 5), --no-filter,
+  respond more), --landmark-starts N (landmark passes averaged, 1..9, default 3), --no-filter,
   --filter-cutoff HZ, --filter-beta B, --cnn FILE|none (CNN cascade),
   --eyes FILE|none (eye model), and the detector options.
 With no input: the first webcam, else a clip from ../shared/data/clips.)";

@@ -238,6 +238,22 @@ def blend(net, lbf, share, ramp=None):
     return w[:, :, None] * net + (1 - w[:, :, None]) * lbf
 
 
+def second_round(net, faces, mean, size, share, ramp, first):
+    """The refine stage's answer (cnn/landmark_refiner.hpp): where the first blend trusts the net beyond its share
+    (g > 0), the patch aligned again on that blend, and the net's second answer blended with LBF the same way."""
+    q = blend(first, faces.lbf, share, ramp)
+    again = np.flatnonzero(net_trust(first, faces.lbf, ramp)[:, 0] > 0)
+    if len(again) == 0:
+        return q
+    realigned = copy.copy(faces)
+    realigned.keys = [faces.keys[i] for i in again]
+    realigned.images, realigned.lbf = faces.images[again], faces.lbf[again]
+    sims = [similarity(mean, x) for x in q[again]]
+    realigned.A, realigned.t = np.stack([s[0] for s in sims]), np.stack([s[1] for s in sims])
+    q[again] = blend(predict(net, realigned, mean, size, False), realigned.lbf, share, ramp)
+    return q
+
+
 def trust_ramp(validation, refined, share):
     """(D0, D1) on a grid with the lowest validation score, the shares fixed."""
     grid = [(d0, d0 + width) for d0 in (0.02, 0.025, 0.03, 0.035, 0.04, 0.05) for width in (0.01, 0.015, 0.02, 0.03)]
@@ -363,10 +379,13 @@ def main():
             print(report(f"{split} blend", point_errors(blend(refined, faces.lbf, share), faces.truth)))
             if ramp:
                 print(report(f"{split} blend with the trust ramp", point_errors(blend(refined, faces.lbf, share, ramp), faces.truth)))
+                print(report(f"{split} with the second round (the refine stage's answer)",
+                             point_errors(second_round(net, faces, mean, a.size, share, ramp, refined), faces.truth)))
             if profiled_val and split == "validation":
                 refined = predict(net, profiled_val, mean, a.size, False)
                 for name, pts in (("LBF", profiled_val.lbf), ("net", refined), ("blend", blend(refined, profiled_val.lbf, share)),
-                                  ("blend with the trust ramp", blend(refined, profiled_val.lbf, share, ramp))):
+                                  ("blend with the trust ramp", blend(refined, profiled_val.lbf, share, ramp)),
+                                  ("with the second round", second_round(net, profiled_val, mean, a.size, share, ramp, refined))):
                     print(report(f"turned validation copies {name} (over sqrt(box))", box_errors(pts, profiled_val.truth)))
         return
     print(report("validation LBF", point_errors(val.lbf, val.truth)), flush=True)

@@ -9,6 +9,9 @@ namespace facetrack::cnn {
 
 namespace {
 
+/// A second round where the first trusts the net beyond its share (landmark_refiner.hpp).
+constexpr int kMaxRounds = 2;
+
 /// Per face: the trust g of the previous frame, averaged into this one's (landmark_refiner.hpp).
 struct RefineFaceState final : pipeline::StageState {
     float trust = 0.f;
@@ -34,14 +37,19 @@ public:
     bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         if (!face.result.landmarks) return true;
         const landmarks::Shape68 lbf = landmarks::fromLandmarks68(*face.result.landmarks);
-        const core::Similarity toFrame = patchToFrame(layout_, lbf);
-        warpAligned(layout_, frame.gray, toFrame, patch_);
-        const landmarks::Shape68 net = netLandmarks(layout_, toFrame, net_.predict(patch_));
-        if (!net.allFinite()) return true;
         float& trust = static_cast<RefineFaceState&>(*state).trust;
-        const float now = netTrust(layout_, net, lbf);
-        trust = face.fresh ? now : 0.5f * (now + trust);
-        const landmarks::Shape68 refined = blendedLandmarks(layout_, net, lbf, trust);
+        const float previous = trust;
+        landmarks::Shape68 refined = lbf;
+        // Round 2 only where the net is trusted beyond its share: there LBF's points, which aligned the patch, are in doubt.
+        for (int round = 0; round < kMaxRounds && (round == 0 || trust > 0.f); ++round) {
+            const core::Similarity toFrame = patchToFrame(layout_, refined);
+            warpAligned(layout_, frame.gray, toFrame, patch_);
+            const landmarks::Shape68 net = netLandmarks(layout_, toFrame, net_.predict(patch_));
+            if (!net.allFinite()) break;
+            const float now = netTrust(layout_, net, lbf);
+            trust = face.fresh ? now : 0.5f * (now + previous);
+            refined = blendedLandmarks(layout_, net, lbf, trust);
+        }
         face.result.landmarks = landmarks::toLandmarks68(refined);
         face.locate(landmarks::boundsOf(refined));
         return true;

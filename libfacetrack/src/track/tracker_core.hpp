@@ -53,11 +53,14 @@ private:
     void detect(const ImageView& frame);
     /// The detection nearest the face's centre on a crop around it, in frame pixels.
     std::optional<Box> findAgain(const pipeline::FaceTrack& face);
-    /// Checks a followed face with the detector. Nothing found: lost when
-    /// `lostWithoutDetection`. Found where the face's box does not agree: the
-    /// face restarts from the detection (fresh; returns true), or is lost when
-    /// another followed face is there already.
-    bool verify(pipeline::FaceTrack& face, bool lostWithoutDetection);
+    /// Why a followed face is checked: now and then (nothing found: lost), or
+    /// because a stage doubts it (nothing found: kept, as blur hides faces from
+    /// the detector too; found: it must agree more closely).
+    enum class Check { Periodic, InDoubt };
+    /// Checks a followed face with the detector. Found where the face's box
+    /// does not agree: the face restarts from the detection (fresh; returns
+    /// true), or is lost when another followed face is there already.
+    bool verify(pipeline::FaceTrack& face, Check why);
     void runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face);
     void dropLost();
     void time(int slot, Clock::time_point start);
