@@ -335,6 +335,7 @@ TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {
 TEST(Cli, EvalLandmarksFollowsEachFolderAsAClipWithSequences) {
     FACETRACK_REQUIRE_SHARED();
     // Two clips of a still face, four frames each: the tracker finds each face itself and follows it.
+    // poses.csv gives every frame 5 degrees of yaw (bin 0-15).
     const std::string dir = test::tempPath("sequences_set"), source = test::sharedDir() + "/data/faces300w/lfpw/testset/";
     std::filesystem::remove_all(dir);
     std::ofstream poses;
@@ -347,8 +348,16 @@ TEST(Cli, EvalLandmarksFollowsEachFolderAsAClipWithSequences) {
             std::filesystem::copy_file(source + name + ".pts", frame + ".pts");
         }
     }
+    std::ofstream(dir + "/poses.csv") << "image,yaw_deg\n";
+    for (const char* name : {"image_0001", "image_0002"})
+        for (int f = 0; f < 4; ++f) std::ofstream(dir + "/poses.csv", std::ios::app) << name << "/000" << f << ".png,5\n";
     const CliRun run = runCli("eval-landmarks '" + dir + "' --sequences --lbf-only --dlib none");
     ASSERT_EQ(run.exit_code, 0) << run.err;
+    // A still face keeps its yaw: after each clip's median difference to poses.csv, nearly none is left.
+    const std::string yawKey = "by |yaw|: head yaw error, offset removed";
+    const auto yawAt = run.out.find(yawKey);
+    ASSERT_NE(yawAt, std::string::npos) << run.out;
+    EXPECT_LT(std::stod(run.out.substr(yawAt + yawKey.size())), 1.0) << run.out.substr(yawAt, 120);
     const std::string key = "followed through each folder's frames (--sequences): ";
     const auto at = run.out.find(key);
     ASSERT_NE(at, std::string::npos) << run.out;

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -65,7 +66,8 @@ box by 15-degree bin of |yaw| (the large-pose figure of docs/landmarks.md).
 make_profiled_faces --turn-clips writes head turns): the tracker, as a video application
 runs it (its own detector until it finds the face, then tracking mode; no filter), follows
 the face through it. Adds, over every frame (with poses.csv, by |yaw| bin): the share of
-frames where it follows no face, and the box NME where it does.)";
+frames where it follows no face, the box NME where it does, and with poses.csv the error of the
+head's yaw once each clip's constant difference to poses.csv (another convention) is removed.)";
 
 using core::Shape2;
 
@@ -178,7 +180,42 @@ struct FollowedFrames {
     std::array<int, kYawBins> frames{}, without_face{};
     std::array<std::vector<double>, kYawBins> box_nmes{};
     double ms = 0.0;
+    /// With poses.csv: the head's yaw error, |yaw - label - m| with m the clip's median of
+    /// yaw - label (the two conventions' constant difference, one per clip: offsets).
+    std::array<std::vector<double>, kYawBins> yaw_errors{};
+    std::vector<double> offsets;
+    struct Frame {
+        double yaw, label;
+        std::size_t bin;
+    };
+    std::vector<Frame> clip;  ///< the current clip's frames with a pose
+
+    void endClip() {
+        if (clip.empty()) return;
+        std::vector<double> d;
+        for (const auto& f : clip) d.push_back(f.yaw - f.label);
+        std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+        const double offset = d[d.size() / 2];
+        offsets.push_back(offset);
+        for (const auto& f : clip) yaw_errors[f.bin].push_back(std::abs(f.yaw - f.label - offset));
+        clip.clear();
+    }
 };
+
+/// "  x.xx% (   n)" per bin, "-" where a bin is empty; `percent` scales by 100.
+void printBins(const char* label, const std::array<std::vector<double>, kYawBins>& bins, bool percent) {
+    std::printf("%-40s", label);
+    for (const auto& bin : bins) {
+        if (bin.empty()) {
+            std::printf("  %-14s", "-");
+            continue;
+        }
+        const double mean = std::accumulate(bin.begin(), bin.end(), 0.0) / static_cast<double>(bin.size());
+        if (percent) std::printf("  %6.2f%% (%4zu)", 100.0 * mean, bin.size());
+        else std::printf("  %5.2f deg (%4zu)", mean, bin.size());
+    }
+    std::putchar('\n');
+}
 
 void writePointsRow(std::ofstream& out, const std::string& image, const std::string& method, const Shape2& points) {
     out << '"' << image << "\",\"" << method << '"';  // quoted: method names have commas
@@ -266,13 +303,15 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         }
         if (sequences) {  // every frame, with or without a YuNet box: the tracker does not need one
             const bool newClip = k == 0 || faces[k].subset != faces[k - 1].subset;
+            if (newClip) followed.endClip();
             const auto start = std::chrono::steady_clock::now();
-            const std::optional<Landmarks68> points = pipeline->followed(bgr, newClip);
+            const FaceResult* face = pipeline->followed(bgr, newClip);
             followed.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
             const std::size_t bin = yawBin.value_or(0);
             ++followed.frames[bin];
-            if (points) followed.box_nmes[bin].push_back(core::nmeBox(Shape2(landmarks::fromLandmarks68(*points)), truth));
+            if (face) followed.box_nmes[bin].push_back(core::nmeBox(Shape2(landmarks::fromLandmarks68(*face->landmarks)), truth));
             else ++followed.without_face[bin];
+            if (face && face->pose && yawBin) followed.clip.push_back({face->pose->euler_deg.y, poses.at(fs::relative(faces[k].image, dir).string()), bin});
         }
         const auto box = tools::matchingBox(detector->detect(tools::viewOf(bgr)), truth);
         if (!box) {
@@ -300,6 +339,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         }
     }
     std::fputc('\n', stderr);
+    followed.endClip();
 
     std::printf("%zu faces, %d without a YuNet box (left out)\n", faces.size(), missed);
     if (pipeline->usesPipeline()) std::printf("%s: %d faces dropped by the fit (LBF's landmarks kept)\n", pipeline->method().c_str(), dropped);
@@ -348,14 +388,18 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
                     pipeline->method().c_str(), frames, followed.ms / std::max(1, frames), without, 100.0 * without / std::max(1, frames),
                     all.empty() ? 0.0 : 100.0 * std::accumulate(all.begin(), all.end(), 0.0) / static_cast<double>(all.size()));
         if (!poses.empty()) {
-            std::printf("%-40s", "by |yaw|: box NME (frames followed)");
-            for (const auto& bin : followed.box_nmes) {
-                if (bin.empty()) std::printf("  %-14s", "-");
-                else std::printf("  %6.2f%% (%4zu)", 100.0 * std::accumulate(bin.begin(), bin.end(), 0.0) / static_cast<double>(bin.size()), bin.size());
-            }
-            std::printf("\n%-40s", "by |yaw|: frames without a face");
+            printBins("by |yaw|: box NME (frames followed)", followed.box_nmes, true);
+            std::printf("%-40s", "by |yaw|: frames without a face");
             for (std::size_t b = 0; b < kYawBins; ++b) std::printf("  %-14s", (std::to_string(followed.without_face[b]) + " of " + std::to_string(followed.frames[b])).c_str());
             std::putchar('\n');
+            printBins("by |yaw|: head yaw error, offset removed", followed.yaw_errors, false);
+            std::vector<double> offsets = followed.offsets;
+            std::sort(offsets.begin(), offsets.end());
+            if (!offsets.empty()) {
+                std::printf("(the yaw error: |yaw - poses.csv's yaw - each clip's median difference|; the median differences of the %zu clips"
+                            " lie in %.1f .. %.1f deg, median %.1f)\n",
+                            offsets.size(), offsets.front(), offsets.back(), offsets[offsets.size() / 2]);
+            }
         }
     }
     if (pointsOut.is_open()) std::printf("points: %s\n", args.get("--points-out").c_str());

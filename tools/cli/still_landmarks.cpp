@@ -30,7 +30,7 @@ StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const s
     tracker_ = std::make_unique<Tracker>(models_, config_);
 }
 
-std::optional<Landmarks68> StillLandmarks::followed(const cv::Mat& bgr, bool newClip) {
+const FaceResult* StillLandmarks::followed(const cv::Mat& bgr, bool newClip) {
     if (!follower_) {
         if (!models_.face) models_.face = FaceModel::loadDefault();
         follower_ = std::make_unique<Tracker>(models_, config_);
@@ -41,8 +41,7 @@ std::optional<Landmarks68> StillLandmarks::followed(const cv::Mat& bgr, bool new
     }
     follower_->process(tools::viewOf(bgr), follower_time_, result_);
     follower_time_ += 1.0 / 30.0;
-    if (result_.faces.empty() || !result_.faces[0].landmarks) return std::nullopt;
-    return *result_.faces[0].landmarks;
+    return result_.faces.empty() || !result_.faces[0].landmarks ? nullptr : &result_.faces[0];
 }
 
 Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Box& box, bool* dropped) {

@@ -9,7 +9,6 @@
 #include <opencv2/core.hpp>
 
 #include <memory>
-#include <optional>
 #include <string>
 
 namespace facetrack::cli {
@@ -34,8 +33,9 @@ public:
     /// The same stages as a video application runs them: `bgr` is the next
     /// frame of a clip at 30 fps (the first of a new one when `newClip`), the
     /// tracker's own detector finds the face and tracking mode follows it (no
-    /// filter). Its landmarks, or none on a frame where it follows no face.
-    std::optional<Landmarks68> followed(const cv::Mat& bgr, bool newClip);
+    /// filter). The followed face (valid until the next call), or null on a
+    /// frame where it follows none.
+    const FaceResult* followed(const cv::Mat& bgr, bool newClip);
 
 private:
     std::shared_ptr<const LandmarkModel> lbf_;
