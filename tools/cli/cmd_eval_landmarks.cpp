@@ -295,11 +295,13 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         if (bgr.empty()) throw Error("cannot read image '" + faces[k].image + "'");
         const Shape2 truth = core::readPts(faces[k].pts);
         if (truth.cols() != 68) throw Error("'" + faces[k].pts + "' does not have 68 points");
+        std::optional<double> yaw;
         std::optional<std::size_t> yawBin;
         if (!poses.empty()) {
             const auto pose = poses.find(fs::relative(faces[k].image, dir).string());
             if (pose == poses.end()) throw Error("'" + faces[k].image + "' is not in " + dir + "/poses.csv");
-            yawBin = std::min(kYawBins - 1, static_cast<std::size_t>(std::abs(pose->second) / 15.0));
+            yaw = pose->second;
+            yawBin = std::min(kYawBins - 1, static_cast<std::size_t>(std::abs(*yaw) / 15.0));
         }
         if (sequences) {  // every frame, with or without a YuNet box: the tracker does not need one
             const bool newClip = k == 0 || faces[k].subset != faces[k - 1].subset;
@@ -311,7 +313,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             ++followed.frames[bin];
             if (face) followed.box_nmes[bin].push_back(core::nmeBox(Shape2(landmarks::fromLandmarks68(*face->landmarks)), truth));
             else ++followed.without_face[bin];
-            if (face && face->pose && yawBin) followed.clip.push_back({face->pose->euler_deg.y, poses.at(fs::relative(faces[k].image, dir).string()), bin});
+            if (face && face->pose && yaw) followed.clip.push_back({face->pose->euler_deg.y, *yaw, bin});
         }
         const auto box = tools::matchingBox(detector->detect(tools::viewOf(bgr)), truth);
         if (!box) {
@@ -364,17 +366,9 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     if (!poses.empty()) {
         std::printf("\nmean NME over sqrt(w h) of the annotation's box, by |yaw| (faces)\n%-40s", "method");
         for (std::size_t b = 0; b < kYawBins; ++b) std::printf("  %2zu-%2zu deg     ", 15 * b, 15 * b + 15);
-        for (const auto& m : methods) {
-            std::printf("\n%-40s", m.name.c_str());
-            for (const auto& bin : m.box_nmes_by_yaw) {
-                if (bin.empty()) {
-                    std::printf("  %-14s", "-");
-                } else {
-                    std::printf("  %6.2f%% (%4zu)", 100.0 * std::accumulate(bin.begin(), bin.end(), 0.0) / static_cast<double>(bin.size()), bin.size());
-                }
-            }
-        }
-        std::printf("\n%-40s", "frames without a YuNet box (left out)");
+        std::putchar('\n');
+        for (const auto& m : methods) printBins(m.name.c_str(), m.box_nmes_by_yaw, true);
+        std::printf("%-40s", "frames without a YuNet box (left out)");
         for (int n : missedByYaw) std::printf("  %-14d", n);
         std::putchar('\n');
     }
