@@ -39,9 +39,9 @@ const FaceResult* StillLandmarks::followed(const cv::Mat& bgr, bool newClip) {
         follower_->reset();
         follower_time_ = 0.0;
     }
-    follower_->process(tools::viewOf(bgr), follower_time_, result_);
+    follower_->process(tools::viewOf(bgr), follower_time_, followed_);
     follower_time_ += 1.0 / 30.0;
-    return result_.faces.empty() || !result_.faces[0].landmarks ? nullptr : &result_.faces[0];
+    return followed_.faces.empty() || !followed_.faces[0].landmarks ? nullptr : &followed_.faces[0];
 }
 
 Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Box& box, bool* dropped) {

@@ -43,7 +43,7 @@ private:
     TrackerConfig config_;
     std::unique_ptr<Tracker> tracker_, follower_;
     double follower_time_ = 0.0;
-    FrameResult result_;
+    FrameResult result_, followed_;
     std::string method_, box_prior_;
     int starts_;
 };

@@ -64,6 +64,7 @@ int run(int argc, char** argv) {
     if (copies < 1 || copies > 20) throw Error("--copies must be in 1..20");
     const int turnClips = args.integer("--turn-clips", 0);
     if (turnClips < 0 || turnClips > 1000) throw Error("--turn-clips must be in 0..1000");
+    const bool turns = turnClips > 0;
     const double turnStep = args.number("--turn-step", 2.0);
     if (!(turnStep >= 0.5 && turnStep <= 20.0)) throw Error("--turn-step must be in [0.5, 20] degrees");
     const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
@@ -87,10 +88,10 @@ int run(int argc, char** argv) {
     std::vector<const dense::LabelTable::Row*> rows;
     for (const auto& row : table.rows) {
         if (row.split != split) continue;
-        if (turnClips > 0 && std::abs(fit::eulerDegrees(dense::labelParams(columns, row).omega()).y()) < 15.0) continue;
+        if (turns && std::abs(fit::eulerDegrees(dense::labelParams(columns, row).omega()).y()) < 15.0) continue;
         rows.push_back(&row);
     }
-    if (turnClips > 0 && static_cast<int>(rows.size()) > turnClips) {
+    if (turns && static_cast<int>(rows.size()) > turnClips) {
         std::vector<const dense::LabelTable::Row*> spaced;
         for (int k = 0; k < turnClips; ++k) spaced.push_back(rows[rows.size() * static_cast<std::size_t>(k) / static_cast<std::size_t>(turnClips)]);
         rows = spaced;
@@ -99,7 +100,7 @@ int run(int argc, char** argv) {
     fs::create_directories(out);
     std::ofstream poses(out + "/poses.csv"), index;
     poses << "image,yaw_deg\n";
-    if (turnClips == 0) {
+    if (!turns) {
         index.open(out + "/index.csv");
         index << "subset,split,image,pts\n";
     }
@@ -118,11 +119,11 @@ int run(int argc, char** argv) {
         const std::vector<float> identityF(identity.data(), identity.data() + identity.size());
         const std::vector<float> expression = profile::nativeWeights(*model, expressions, label.expression);
         int kept = 0;  // numbers the copies: two may round to one yaw
-        for (const auto& copy : turnClips > 0 ? profile::turnSequence(*model, grey, camera, identityF, expression, label, turnStep)
+        for (const auto& copy : turns ? profile::turnSequence(*model, grey, camera, identityF, expression, label, turnStep)
                                               : profile::profiledCopies(*model, grey, camera, identityF, expression, label, copies, rng)) {
             const double yaw = fit::eulerDegrees(copy.label.omega()).y();
             char suffix[32];
-            if (turnClips > 0) std::snprintf(suffix, sizeof suffix, "/%04d", kept++);
+            if (turns) std::snprintf(suffix, sizeof suffix, "/%04d", kept++);
             else std::snprintf(suffix, sizeof suffix, "@%d_yaw%+.0f", kept++, yaw);
             const std::string name = stem + suffix;
             fs::create_directories(fs::path(out + "/" + name).parent_path());
@@ -133,13 +134,13 @@ int run(int argc, char** argv) {
             if (index.is_open()) index << stem.substr(0, stem.rfind('/')) << ',' << split << ',' << name << ".pgm," << name << ".pts\n";
             ++written;
         }
-        if (++crops % 20 == 0 || turnClips > 0 || static_cast<std::size_t>(crops) == total)
-            std::fprintf(stderr, "\r%d/%zu crops, %d %s", crops, total, written, turnClips > 0 ? "frames" : "copies");
+        if (++crops % 20 == 0 || turns || static_cast<std::size_t>(crops) == total)
+            std::fprintf(stderr, "\r%d/%zu crops, %d %s", crops, total, written, turns ? "frames" : "copies");
     }
     std::fputc('\n', stderr);
     if (crops == 0) throw Error("no labelled crops in split '" + split + "'");
     if (!poses || (index.is_open() && !index)) throw Error("cannot write " + out + "/poses.csv or index.csv");
-    std::printf("%d %s crops -> %d %s in %s\n", crops, split.c_str(), written, turnClips > 0 ? "frames of head turns" : "profiled copies", out.c_str());
+    std::printf("%d %s crops -> %d %s in %s\n", crops, split.c_str(), written, turns ? "frames of head turns" : "profiled copies", out.c_str());
     return 0;
 }
 
