@@ -25,6 +25,7 @@
 #include <cstring>
 #include <fstream>
 #include <numeric>
+#include <set>
 
 namespace facetrack {
 namespace {
@@ -71,6 +72,25 @@ TEST(EyePatch, PutsTheCornersAtFixedPointsAndMirrorsTheLeftEye) {
     // An eye at the frame's border: the border repeats, nothing is read outside.
     EXPECT_TRUE(cutEyePatch(gray, {-20, 5}, {15, -3}, false, p));
     EXPECT_TRUE(cv::checkRange(p.pixels));
+}
+
+TEST(EyePatch, AnEyeCrossingTheBorderReadsTheRepeatedBorder) {
+    // The same eye cut from the frame (edge reads clamped) and from the frame padded by its repeated
+    // edges (every read inside): one patch. An eye wholly inside reads the same with and without the padding.
+    cv::Mat gray(120, 160, CV_8U), padded;
+    cv::randu(gray, 0, 256);
+    constexpr int kPad = 40;
+    cv::copyMakeBorder(gray, padded, kPad, kPad, kPad, kPad, cv::BORDER_REPLICATE);
+    for (const auto& [outer, inner] : {std::pair<Point2, Point2>{{-12.3f, 7.6f}, {21.4f, -2.2f}}, {{139.1f, 104.7f}, {171.5f, 118.2f}},
+                                       {{60.4f, 50.9f}, {95.2f, 47.3f}}}) {
+        EyePatch cut, fromPadded;
+        ASSERT_TRUE(cutEyePatch(gray, outer, inner, false, cut));
+        ASSERT_TRUE(cutEyePatch(padded, {outer.x + kPad, outer.y + kPad}, {inner.x + kPad, inner.y + kPad}, false, fromPadded));
+        double largest = 0.0;
+        cv::minMaxLoc(cv::abs(cut.pixels - fromPadded.pixels), nullptr, &largest);
+        EXPECT_LT(largest, 1e-3) << "eye at (" << outer.x << ", " << outer.y << ")";
+        EXPECT_GT(cv::norm(cut.pixels), 10.0);  // a textured patch, not a flat one
+    }
 }
 
 /// A one-tree forest of depth 1 whose two leaves both hold `offsets`.
@@ -157,6 +177,42 @@ TEST(PatchForest, TrainingLearnsAPixelRuleAndEvaluatesIt) {
     EXPECT_THROW(trainPatchForest(patches, {}, {}, 2, o), Error);
 }
 
+TEST(PatchForest, APaddedPatchGivesWhatClampedReadsGiveAtEveryPixel) {
+    // Random tests of every kind reaching 8 px, at every anchor of a patch, edges included (where reads are clamped).
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    std::uniform_int_distribution<int> offset(-kPixelTestReach, kPixelTestReach), kind(0, 3);
+    PatchForest forest;
+    forest.depth = 6;
+    forest.outputs = 3;
+    forest.splits.resize(5 * static_cast<std::size_t>(forest.splitsPerTree()));
+    for (PatchFeature& f : forest.splits) {
+        f.kind = static_cast<std::uint8_t>(kind(rng));
+        f.ax = static_cast<std::int8_t>(offset(rng)), f.ay = static_cast<std::int8_t>(offset(rng));
+        f.bx = static_cast<std::int8_t>(offset(rng)), f.by = static_cast<std::int8_t>(offset(rng));
+        f.threshold = f.kind >= PatchFeature::Column ? static_cast<float>(offset(rng) + 20) : 0.3f * u(rng);
+    }
+    forest.leaves.resize(5 * static_cast<std::size_t>(forest.leavesPerTree()) * 3);
+    for (float& v : forest.leaves) v = u(rng);
+    ASSERT_NO_THROW(forest.validate("test forest"));
+    EXPECT_LE(forest.reach(), kPixelTestReach);
+    cv::Mat patch(kPatchHeight, kPatchWidth, CV_32F), padded;
+    for (int y = 0; y < patch.rows; ++y)
+        for (int x = 0; x < patch.cols; ++x) patch.at<float>(y, x) = u(rng);
+    padPatch(patch, kPixelTestReach, padded);
+    std::set<std::vector<float>> outputs;
+    for (int y = 0; y < patch.rows; ++y) {
+        for (int x = 0; x < patch.cols; ++x) {
+            std::vector<float> clamped(3), fast(3);
+            forest.evaluate(patch, x, y, clamped.data());
+            forest.evaluatePadded(padded, kPixelTestReach, x, y, fast.data());
+            ASSERT_EQ(clamped, fast) << "at (" << x << ", " << y << ")";
+            outputs.insert(fast);
+        }
+    }
+    EXPECT_GT(outputs.size(), 100u);  // the anchors reach many leaves: the comparison is not of one constant
+}
+
 TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     FACETRACK_REQUIRE_EYE_MODEL();
     const std::string shipped = test::sourceDir() + "/models/eye_model.ftm";
@@ -207,6 +263,9 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     bad.corner_stages.back().leaves.resize(4);
     EXPECT_THROW(writeEyeModel(copy, bad), Error);
     bad.corner_stages.assign(kMaxCornerStages + 1, constantCornerForest({0, 0, 0, 0}));
+    EXPECT_THROW(writeEyeModel(copy, bad), Error);
+    bad = m;
+    bad.pixels.splits.front() = PatchFeature{0, 0, kPixelTestReach + 1, 0};  // a pixel test reaching past the padding
     EXPECT_THROW(writeEyeModel(copy, bad), Error);
     std::filesystem::remove(copy);
 }

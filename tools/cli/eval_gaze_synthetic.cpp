@@ -105,7 +105,7 @@ public:
             open[e] = &eye.open;
         }
         if (net_) net_->classify(patches, iris, open);
-        else for (std::size_t e = 0; e < 2; ++e) gaze::classifyByForest(eyes_->data(), eyes_seen_[e].patch.pixels, eyes_seen_[e].iris, eyes_seen_[e].open);
+        else for (std::size_t e = 0; e < 2; ++e) gaze::classifyByForest(eyes_->data(), eyes_seen_[e].patch.pixels, padded_, eyes_seen_[e].iris, eyes_seen_[e].open);
         std::array<std::array<double, 2>, 2> out{};
         const gaze::GazeAngles none{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
         for (int k = 0; k < 2; ++k) {
@@ -129,6 +129,7 @@ private:
     std::array<EyeRig, 2> rigs_;
     std::optional<gaze::IrisNet> net_;
     std::array<Eye, 2> eyes_seen_;
+    cv::Mat padded_;  // scratch for the pixel forest
 };
 
 /// A frontal face at inter-ocular distance `iod` px looking at (yaw, pitch), with eyeBlink weights.

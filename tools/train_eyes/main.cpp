@@ -268,7 +268,7 @@ int pixelClassOf(const EyeSample& e, int x, int y) {
 }
 
 PatchFeature drawPixelTest(std::mt19937& rng) {
-    std::uniform_int_distribution<int> offset(-8, 8), kind(0, 19);
+    std::uniform_int_distribution<int> offset(-kPixelTestReach, kPixelTestReach), kind(0, 19);
     PatchFeature f;
     const int k = kind(rng);
     f.kind = k < 14 ? PatchFeature::Difference : k < 18 ? PatchFeature::Intensity : k < 19 ? PatchFeature::Row : PatchFeature::Column;

@@ -34,6 +34,7 @@ void validate(const EyeModelData& m, const std::string& what) {
     m.pixels.validate(what.c_str());
     m.aperture.validate(what.c_str());
     if (m.pixels.outputs != kPixelClasses || m.aperture.outputs != 1) throw Error(what + ": corrupt: forest outputs");
+    if (m.pixels.reach() > kPixelTestReach) throw Error(what + ": corrupt: pixel tests reach beyond " + std::to_string(kPixelTestReach) + " px");
     if (!(m.open_aperture > 0.f && m.open_aperture < 2.f && m.closed_aperture >= 0.f && m.closed_aperture < m.open_aperture))
         throw Error(what + ": corrupt: open or closed aperture");
     if (m.corner_stages.size() > kMaxCornerStages) throw Error(what + ": corrupt: corner stages");
@@ -100,13 +101,14 @@ std::array<Point2, 2> eyeCorners(const EyeModelData& model, const cv::Mat& gray,
     return corners;
 }
 
-void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& iris, cv::Mat& open) {
+void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& padded, cv::Mat& iris, cv::Mat& open) {
+    padPatch(patch, kPixelTestReach, padded);
     float p[kPixelClasses];
     for (int y = 0; y < kClassifiedRegion.rows(); ++y) {
         float* irisRow = iris.ptr<float>(y);
         float* openRow = open.ptr<float>(y);
         for (int x = 0; x < kClassifiedRegion.columns(); ++x) {
-            model.pixels.evaluate(patch, kClassifiedRegion.x(x), kClassifiedRegion.y(y), p);
+            model.pixels.evaluatePadded(padded, kPixelTestReach, kClassifiedRegion.x(x), kClassifiedRegion.y(y), p);
             irisRow[x] = p[kIris];
             openRow[x] = p[kIris] + p[kSclera];
         }

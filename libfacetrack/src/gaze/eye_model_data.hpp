@@ -67,10 +67,15 @@ std::array<Point2, 2> refineCorners(const PatchForest& forest, const EyePatch& p
 /// gaze (docs/gaze.md).
 std::array<Point2, 2> eyeCorners(const EyeModelData& model, const cv::Mat& gray, const EyePatch& patch, EyePatch& scratch);
 
+/// The pixel forest's tests reach at most this far from the classified pixel
+/// (a file whose tests reach further is corrupt): classifyByForest pads the
+/// patch by it once instead of clamping every read.
+constexpr int kPixelTestReach = 8;
+
 /// P(iris) and P(open) = P(sclera) + P(iris) of one normalised patch on
 /// kClassifiedRegion's cells, by the pixel forest, into `iris` and `open`
-/// (CV_32F, rows() x columns(), allocated by the caller).
-void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& iris, cv::Mat& open);
+/// (CV_32F, rows() x columns(), allocated by the caller); `padded` is scratch.
+void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& padded, cv::Mat& iris, cv::Mat& open);
 
 /// At most this many corner stages (a file with more is corrupt).
 constexpr std::size_t kMaxCornerStages = 4;

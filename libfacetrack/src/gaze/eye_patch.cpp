@@ -37,19 +37,38 @@ bool cutEyePatch(const cv::Mat& gray, Point2 outer, Point2 inner, bool mirror, E
     out.pixels.create(kPatchHeight, kPatchWidth, CV_32F);
     const cv::Matx23f& back_map = out.image_from_patch;
     const int w = gray.cols, h = gray.rows;
+    // The sample points span the parallelogram of the patch's corner pixels: when it lies inside
+    // the frame, no sample needs its neighbours clamped (the same values, about twice as fast).
+    bool inside = true;
+    for (const int y : {0, kPatchHeight - 1}) {
+        for (const int x : {0, kPatchWidth - 1}) {
+            const float sx = back_map(0, 0) * x + back_map(0, 1) * y + back_map(0, 2);
+            const float sy = back_map(1, 0) * x + back_map(1, 1) * y + back_map(1, 2);
+            inside = inside && sx >= 1.f && sy >= 1.f && sx < static_cast<float>(w - 3) && sy < static_cast<float>(h - 3);
+        }
+    }
     double sum = 0.0, sumSquares = 0.0;
     for (int y = 0; y < kPatchHeight; ++y) {
         float* row = out.pixels.ptr<float>(y);
         for (int x = 0; x < kPatchWidth; ++x) {
             const float sx = back_map(0, 0) * x + back_map(0, 1) * y + back_map(0, 2);
             const float sy = back_map(1, 0) * x + back_map(1, 1) * y + back_map(1, 2);
-            const float fx = std::floor(sx), fy = std::floor(sy);
-            const float ax = sx - fx, ay = sy - fy;
-            const int x0 = std::clamp(static_cast<int>(fx), 0, w - 1), x1 = std::clamp(static_cast<int>(fx) + 1, 0, w - 1);
-            const int y0 = std::clamp(static_cast<int>(fy), 0, h - 1), y1 = std::clamp(static_cast<int>(fy) + 1, 0, h - 1);
-            const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0);
-            const std::uint8_t* r1 = gray.ptr<std::uint8_t>(y1);
-            const float v = (1.f - ay) * ((1.f - ax) * r0[x0] + ax * r0[x1]) + ay * ((1.f - ax) * r1[x0] + ax * r1[x1]);
+            float v;
+            if (inside) {
+                const int x0 = static_cast<int>(sx), y0 = static_cast<int>(sy);
+                const float ax = sx - static_cast<float>(x0), ay = sy - static_cast<float>(y0);
+                const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0) + x0;
+                const std::uint8_t* r1 = r0 + gray.step[0];
+                v = (1.f - ay) * ((1.f - ax) * r0[0] + ax * r0[1]) + ay * ((1.f - ax) * r1[0] + ax * r1[1]);
+            } else {
+                const float fx = std::floor(sx), fy = std::floor(sy);
+                const float ax = sx - fx, ay = sy - fy;
+                const int x0 = std::clamp(static_cast<int>(fx), 0, w - 1), x1 = std::clamp(static_cast<int>(fx) + 1, 0, w - 1);
+                const int y0 = std::clamp(static_cast<int>(fy), 0, h - 1), y1 = std::clamp(static_cast<int>(fy) + 1, 0, h - 1);
+                const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0);
+                const std::uint8_t* r1 = gray.ptr<std::uint8_t>(y1);
+                v = (1.f - ay) * ((1.f - ax) * r0[x0] + ax * r0[x1]) + ay * ((1.f - ax) * r1[x0] + ax * r1[x1]);
+            }
             row[x] = v;
             sum += v;
             sumSquares += static_cast<double>(v) * v;

@@ -77,6 +77,7 @@ struct GazeFaceState final : pipeline::StageState {
     bool have_offset = false;
     std::vector<Vec3> mesh;
     EyePatch recut;  // the corner cascade's later stages' patches
+    cv::Mat padded;  // an eye patch padded for the pixel forest
 };
 
 /// Indices of the face model's eye shapes (-1 when it has no such shape).
@@ -316,7 +317,7 @@ private:
             return;
         }
         for (std::size_t e = 0; e < 2; ++e)
-            if (cut[e]) classifyByForest(model, s.eyes[e].patch.pixels, s.eyes[e].iris, s.eyes[e].open);
+            if (cut[e]) classifyByForest(model, s.eyes[e].patch.pixels, s.padded, s.eyes[e].iris, s.eyes[e].open);
     }
 
     /// The eyeball centres of this face's identity (once per identity: a mesh evaluation).
