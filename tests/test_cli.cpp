@@ -325,10 +325,35 @@ TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {
     EXPECT_EQ(bins[6], "-");
     EXPECT_LT(std::stod(bins[1]), 6.0);  // frontal 300-W test faces: a few percent of the box
 
+    // --poses reads a label_dense table (key, split, ..., yaw_deg, ...) in place of DIR/poses.csv: the yaws swapped.
+    const std::string labels = dir + "/labels.csv";
+    std::ofstream(labels) << "key,split,residual,pitch_deg,yaw_deg,roll_deg\nsub/image_0001.pgm,test,0.01,2,-50,1\n"
+                             "sub/image_0002.pgm,test,0.01,3,20.5,0\n";
+    const CliRun swapped = runCli("eval-landmarks '" + dir + "' --lbf-only --dlib none --poses '" + labels + "'");
+    ASSERT_EQ(swapped.exit_code, 0) << swapped.err;
+    const auto at = swapped.out.find("by |yaw|");
+    ASSERT_NE(at, std::string::npos) << swapped.out;
+    std::istringstream swappedRows(swapped.out.substr(at));
+    while (std::getline(swappedRows, line) && line.rfind("facetrack LBF, 3 starts", 0) != 0) {}
+    std::istringstream swappedCells(std::regex_replace(line.substr(40), std::regex("\\( +"), "("));
+    std::vector<std::string> swappedBins;
+    for (std::string cell; swappedCells >> cell;) swappedBins.push_back(cell);
+    ASSERT_EQ(swappedBins.size(), 8u) << line;
+    EXPECT_EQ(swappedBins[1], bins[4]);  // image_0002 now in 15-30 degrees, image_0001 in 45-60
+    EXPECT_EQ(swappedBins[4], bins[1]);
+    // A teacher's table may lack a face: it is left out of the bins and counted, not an error.
+    std::ofstream(labels) << "key,split,residual,pitch_deg,yaw_deg,roll_deg\nsub/image_0001.pgm,test,0.01,2,-50,1\n";
+    const CliRun partial = runCli("eval-landmarks '" + dir + "' --lbf-only --dlib none --poses '" + labels + "'");
+    ASSERT_EQ(partial.exit_code, 0) << partial.err;
+    EXPECT_NE(partial.out.find("(1 faces without a yaw in"), std::string::npos) << partial.out;
+
     std::ofstream(dir + "/poses.csv") << "image,yaw_deg\nsub/image_0001.pgm,20.5\n";
     const CliRun missing = runCli("eval-landmarks '" + dir + "' --lbf-only --dlib none");
     EXPECT_EQ(missing.exit_code, 1);
     EXPECT_NE(missing.err.find("image_0002.pgm' is not in"), std::string::npos) << missing.err;
+    const CliRun noFile = runCli("eval-landmarks '" + dir + "' --lbf-only --dlib none --poses '" + dir + "/none.csv'");
+    EXPECT_EQ(noFile.exit_code, 1);
+    EXPECT_NE(noFile.err.find("cannot read poses"), std::string::npos) << noFile.err;
     std::filesystem::remove_all(dir);
 }
 

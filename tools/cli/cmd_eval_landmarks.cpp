@@ -6,6 +6,7 @@
 
 #include "app/image_view.hpp"
 #include "core/pts.hpp"
+#include "dense/label_table.hpp"
 #include "facetrack/facetrack.hpp"
 #include "landmarks/lbf.hpp"
 
@@ -37,7 +38,7 @@ namespace {
 const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
                                 [--cascade FILE] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
                                 [--plot ced.png] [--max-error 0.08] [--landmark-starts N]
-                                [--tracked-frames N] [--points-out FILE.csv] [--sequences]
+                                [--tracked-frames N] [--points-out FILE.csv] [--sequences] [--poses FILE]
 Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
 YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
 root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
@@ -62,6 +63,10 @@ the annotation's rows have method "annotation").
 When DIR holds a poses.csv (image path below DIR, yaw_deg), as the large-pose sets of
 build/tools/make_profiled_faces do, also the mean NME over sqrt(w h) of the annotation's
 box by 15-degree bin of |yaw| (the large-pose figure of docs/landmarks.md).
+--poses FILE takes each image's yaw from FILE instead: a poses.csv, or a table of label_dense
+(its key is the path below DIR). So `eval-landmarks ../shared/data/faces300w --split test --poses build/dense_labels/faces300w.csv`
+bins the photographed faces by the dense teacher labels' yaw (a teacher's estimate, not ground truth);
+faces the file has no yaw for are left out of the bins and counted.
 --sequences: each folder's images, in name order, are also a clip at 30 fps (as
 make_profiled_faces --turn-clips writes head turns): the tracker, as a video application
 runs it (its own detector until it finds the face, then tracking mode; no filter), follows
@@ -73,20 +78,31 @@ using core::Shape2;
 
 constexpr std::size_t kYawBins = 6;  // |yaw| 0-15, ..., 75-90 deg
 
-/// DIR/poses.csv as {image path below DIR: yaw in degrees}; empty when there is none.
-std::map<std::string, double> readPoses(const std::string& dir) {
+/// A poses file as {image path below DIR: yaw in degrees}: a poses.csv (image,yaw_deg), or a label_dense
+/// table (key, split, ..., yaw_deg, ...). Empty when `required` is false and there is no file.
+std::map<std::string, double> readPoses(const std::string& path, bool required) {
     std::map<std::string, double> yaw;
-    std::ifstream in(dir + "/poses.csv");
-    if (!in) return yaw;
+    std::ifstream in(path);
+    if (!in) {
+        if (required) throw Error("cannot read poses '" + path + "'");
+        return yaw;
+    }
     std::string line;
     std::getline(in, line);
-    if (line != "image,yaw_deg") throw Error("'" + dir + "/poses.csv': expected the header image,yaw_deg");
+    if (line.rfind("key,split,", 0) == 0) {
+        const dense::LabelTable table = dense::readLabelTable(path);
+        const int degrees = table.column("yaw_deg");
+        if (degrees < 0) throw Error("'" + path + "': the labels have no yaw_deg column");
+        for (const auto& row : table.rows) yaw[row.key] = row.values[static_cast<std::size_t>(degrees)];
+        return yaw;
+    }
+    if (line != "image,yaw_deg") throw Error("'" + path + "': expected the header image,yaw_deg (or a label_dense table)");
     while (std::getline(in, line)) {
         const auto comma = line.rfind(',');
         char* end = nullptr;
         const double deg = comma == std::string::npos ? 0.0 : std::strtod(line.c_str() + comma + 1, &end);
         if (comma == std::string::npos || end == line.c_str() + comma + 1 || !std::isfinite(deg)) {
-            throw Error("'" + dir + "/poses.csv': malformed line '" + line + "'");
+            throw Error("'" + path + "': malformed line '" + line + "'");
         }
         yaw[line.substr(0, comma)] = deg;
     }
@@ -227,7 +243,7 @@ void writePointsRow(std::ofstream& out, const std::string& image, const std::str
 
 int runEvalLandmarks(const std::vector<std::string>& argv) {
     const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts",
-                                 "--tracked-frames", "--points-out"},
+                                 "--tracked-frames", "--points-out", "--poses"},
                     {"--help", "--lbf-only", "--sequences"});
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -238,6 +254,8 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     const double maxError = args.number("--max-error", 0.08);
     if (!(maxError > 0.0 && maxError <= 1.0)) throw Error("--max-error must be in (0, 1]");
     if (args.has("--split")) tools::parseSplit(args.get("--split"));  // checked before anything opens
+    const std::string posesPath = args.get("--poses", dir + "/poses.csv");
+    std::map<std::string, double> poses = args.has("--poses") ? readPoses(posesPath, true) : std::map<std::string, double>();
 
     std::vector<Method> methods;
     const auto lbf = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
@@ -273,7 +291,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     config.yunet_model = args.get("--yunet");
     auto detector = createFaceDetector(config);
     const auto faces = args.has("--split") ? tools::list300W(dir, tools::parseSplit(args.get("--split"))) : tools::listAnnotated(dir);
-    const std::map<std::string, double> poses = args.has("--split") ? std::map<std::string, double>() : readPoses(dir);
+    if (!args.has("--poses") && !args.has("--split")) poses = readPoses(posesPath, false);
 
     std::ofstream pointsOut;
     if (args.has("--points-out")) {
@@ -288,6 +306,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     const bool sequences = args.has("--sequences");
     FollowedFrames followed;
     std::array<int, kYawBins> missedByYaw{};
+    int withoutYaw = 0;  // --poses: faces the file has no yaw for
     int missed = 0;
     cv::Mat gray;
     for (std::size_t k = 0; k < faces.size(); ++k) {
@@ -299,9 +318,14 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         std::optional<std::size_t> yawBin;
         if (!poses.empty()) {
             const auto pose = poses.find(fs::relative(faces[k].image, dir).string());
-            if (pose == poses.end()) throw Error("'" + faces[k].image + "' is not in " + dir + "/poses.csv");
-            yaw = pose->second;
-            yawBin = std::min(kYawBins - 1, static_cast<std::size_t>(std::abs(*yaw) / 15.0));
+            // A set's own poses.csv names every image; a teacher's table may lack a face it did not label.
+            if (pose == poses.end() && !args.has("--poses")) throw Error("'" + faces[k].image + "' is not in " + posesPath);
+            if (pose != poses.end()) {
+                yaw = pose->second;
+                yawBin = std::min(kYawBins - 1, static_cast<std::size_t>(std::abs(*yaw) / 15.0));
+            } else {
+                ++withoutYaw;
+            }
         }
         if (sequences) {  // every frame, with or without a YuNet box: the tracker does not need one
             const bool newClip = k == 0 || faces[k].subset != faces[k - 1].subset;
@@ -318,7 +342,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         const auto box = tools::matchingBox(detector->detect(tools::viewOf(bgr)), truth);
         if (!box) {
             ++missed;
-            ++missedByYaw[yawBin.value_or(0)];
+            if (yawBin) ++missedByYaw[*yawBin];
             continue;
         }
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
@@ -371,6 +395,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         std::printf("%-40s", "frames without a YuNet box (left out)");
         for (int n : missedByYaw) std::printf("  %-14d", n);
         std::putchar('\n');
+        if (withoutYaw > 0) std::printf("(%d faces without a yaw in %s: left out of the bins)\n", withoutYaw, posesPath.c_str());
     }
     if (sequences) {
         const int frames = std::accumulate(followed.frames.begin(), followed.frames.end(), 0);
