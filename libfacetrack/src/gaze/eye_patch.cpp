@@ -38,7 +38,7 @@ bool cutEyePatch(const cv::Mat& gray, Point2 outer, Point2 inner, bool mirror, E
     const cv::Matx23f& back_map = out.image_from_patch;
     const int w = gray.cols, h = gray.rows;
     // The sample points span the parallelogram of the patch's corner pixels: when it lies inside
-    // the frame, no sample needs its neighbours clamped (the same values, about twice as fast).
+    // the frame, no sample needs its neighbours clamped (the same values; the gaze stage ~7 % faster).
     bool inside = true;
     for (const int y : {0, kPatchHeight - 1}) {
         for (const int x : {0, kPatchWidth - 1}) {
