@@ -53,22 +53,19 @@ bool cutEyePatch(const cv::Mat& gray, Point2 outer, Point2 inner, bool mirror, E
         for (int x = 0; x < kPatchWidth; ++x) {
             const float sx = back_map(0, 0) * x + back_map(0, 1) * y + back_map(0, 2);
             const float sy = back_map(1, 0) * x + back_map(1, 1) * y + back_map(1, 2);
-            float v;
+            // Inside, the floor is the truncation and the neighbours are in the frame.
+            int x0, y0, x1, y1;
             if (inside) {
-                const int x0 = static_cast<int>(sx), y0 = static_cast<int>(sy);
-                const float ax = sx - static_cast<float>(x0), ay = sy - static_cast<float>(y0);
-                const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0) + x0;
-                const std::uint8_t* r1 = r0 + gray.step[0];
-                v = (1.f - ay) * ((1.f - ax) * r0[0] + ax * r0[1]) + ay * ((1.f - ax) * r1[0] + ax * r1[1]);
+                x0 = static_cast<int>(sx), y0 = static_cast<int>(sy), x1 = x0 + 1, y1 = y0 + 1;
             } else {
-                const float fx = std::floor(sx), fy = std::floor(sy);
-                const float ax = sx - fx, ay = sy - fy;
-                const int x0 = std::clamp(static_cast<int>(fx), 0, w - 1), x1 = std::clamp(static_cast<int>(fx) + 1, 0, w - 1);
-                const int y0 = std::clamp(static_cast<int>(fy), 0, h - 1), y1 = std::clamp(static_cast<int>(fy) + 1, 0, h - 1);
-                const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0);
-                const std::uint8_t* r1 = gray.ptr<std::uint8_t>(y1);
-                v = (1.f - ay) * ((1.f - ax) * r0[x0] + ax * r0[x1]) + ay * ((1.f - ax) * r1[x0] + ax * r1[x1]);
+                const int fx = static_cast<int>(std::floor(sx)), fy = static_cast<int>(std::floor(sy));
+                x0 = std::clamp(fx, 0, w - 1), x1 = std::clamp(fx + 1, 0, w - 1);
+                y0 = std::clamp(fy, 0, h - 1), y1 = std::clamp(fy + 1, 0, h - 1);
             }
+            const float ax = sx - std::floor(sx), ay = sy - std::floor(sy);
+            const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0);
+            const std::uint8_t* r1 = gray.ptr<std::uint8_t>(y1);
+            const float v = (1.f - ay) * ((1.f - ax) * r0[x0] + ax * r0[x1]) + ay * ((1.f - ax) * r1[x0] + ax * r1[x1]);
             row[x] = v;
             sum += v;
             sumSquares += static_cast<double>(v) * v;

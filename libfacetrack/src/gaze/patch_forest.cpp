@@ -11,71 +11,59 @@
 namespace facetrack::gaze {
 
 namespace {
-inline float at(const cv::Mat& patch, int x, int y) {
-    x = std::clamp(x, 0, patch.cols - 1);
-    y = std::clamp(y, 0, patch.rows - 1);
-    return patch.ptr<float>(y)[x];
-}
-}  // namespace
 
-float PatchFeature::value(const cv::Mat& patch, int x, int y) const {
-    switch (kind) {
-        case Difference: return at(patch, x + ax, y + ay) - at(patch, x + bx, y + by);
-        case Intensity: return at(patch, x + ax, y + ay);
-        case Column: return static_cast<float>(x);
-        case Row: return static_cast<float>(y);
+/// A test's value at anchor (x, y); read(dx, dy) is the patch's pixel at (x + dx, y + dy).
+template <class Read>
+inline float valueOf(const PatchFeature& f, int x, int y, const Read& read) {
+    switch (f.kind) {
+        case PatchFeature::Difference: return read(f.ax, f.ay) - read(f.bx, f.by);
+        case PatchFeature::Intensity: return read(f.ax, f.ay);
+        case PatchFeature::Column: return static_cast<float>(x);
+        case PatchFeature::Row: return static_cast<float>(y);
     }
     return 0.f;
 }
 
-int PatchForest::leaf(int t, const cv::Mat& patch, int x, int y) const {
-    const PatchFeature* tree = splits.data() + static_cast<std::size_t>(t) * static_cast<std::size_t>(splitsPerTree());
-    int node = 0;
-    for (int d = 0; d < depth; ++d) {
-        const PatchFeature& f = tree[node];
-        node = 2 * node + (f.value(patch, x, y) >= f.threshold ? 2 : 1);
-    }
-    return node - splitsPerTree();
-}
-
-void PatchForest::evaluate(const cv::Mat& patch, int x, int y, float* out) const {
-    std::fill(out, out + outputs, 0.f);
-    const int trees = treeCount();
+/// out[0, outputs) = the mean over the forest's trees of the leaves reached from (x, y).
+template <class Read>
+void evaluateWith(const PatchForest& forest, int x, int y, const Read& read, float* out) {
+    std::fill(out, out + forest.outputs, 0.f);
+    const int trees = forest.treeCount(), perTree = forest.splitsPerTree();
     for (int t = 0; t < trees; ++t) {
-        const float* values = leaves.data() + (static_cast<std::size_t>(t) * leavesPerTree() + leaf(t, patch, x, y)) * outputs;
-        for (int k = 0; k < outputs; ++k) out[k] += values[k];
+        const PatchFeature* tree = forest.splits.data() + static_cast<std::size_t>(t) * static_cast<std::size_t>(perTree);
+        int node = 0;
+        for (int d = 0; d < forest.depth; ++d) {
+            const PatchFeature& f = tree[node];
+            node = 2 * node + (valueOf(f, x, y, read) >= f.threshold ? 2 : 1);
+        }
+        const float* values =
+            forest.leaves.data() + (static_cast<std::size_t>(t) * forest.leavesPerTree() + (node - perTree)) * forest.outputs;
+        for (int k = 0; k < forest.outputs; ++k) out[k] += values[k];
     }
     if (trees > 0) {
-        for (int k = 0; k < outputs; ++k) out[k] /= static_cast<float>(trees);
+        for (int k = 0; k < forest.outputs; ++k) out[k] /= static_cast<float>(trees);
     }
+}
+
+/// Reads the patch at (x + dx, y + dy), clamped to its edges.
+auto clampedReader(const cv::Mat& patch, int x, int y) {
+    return [&patch, x, y](int dx, int dy) {
+        return patch.ptr<float>(std::clamp(y + dy, 0, patch.rows - 1))[std::clamp(x + dx, 0, patch.cols - 1)];
+    };
+}
+
+}  // namespace
+
+float PatchFeature::value(const cv::Mat& patch, int x, int y) const { return valueOf(*this, x, y, clampedReader(patch, x, y)); }
+
+void PatchForest::evaluate(const cv::Mat& patch, int x, int y, float* out) const {
+    evaluateWith(*this, x, y, clampedReader(patch, x, y), out);
 }
 
 void PatchForest::evaluatePadded(const cv::Mat& padded, int margin, int x, int y, float* out) const {
     const float* anchor = padded.ptr<float>(y + margin) + x + margin;
     const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(padded.step1());
-    const auto at = [&](int dx, int dy) { return anchor[dy * stride + dx]; };
-    std::fill(out, out + outputs, 0.f);
-    const int trees = treeCount(), perTree = splitsPerTree();
-    for (int t = 0; t < trees; ++t) {
-        const PatchFeature* tree = splits.data() + static_cast<std::size_t>(t) * static_cast<std::size_t>(perTree);
-        int node = 0;
-        for (int d = 0; d < depth; ++d) {
-            const PatchFeature& f = tree[node];
-            float value = 0.f;
-            switch (f.kind) {
-                case PatchFeature::Difference: value = at(f.ax, f.ay) - at(f.bx, f.by); break;
-                case PatchFeature::Intensity: value = at(f.ax, f.ay); break;
-                case PatchFeature::Column: value = static_cast<float>(x); break;
-                case PatchFeature::Row: value = static_cast<float>(y); break;
-            }
-            node = 2 * node + (value >= f.threshold ? 2 : 1);
-        }
-        const float* values = leaves.data() + (static_cast<std::size_t>(t) * leavesPerTree() + (node - perTree)) * outputs;
-        for (int k = 0; k < outputs; ++k) out[k] += values[k];
-    }
-    if (trees > 0) {
-        for (int k = 0; k < outputs; ++k) out[k] /= static_cast<float>(trees);
-    }
+    evaluateWith(*this, x, y, [anchor, stride](int dx, int dy) { return anchor[dy * stride + dx]; }, out);
 }
 
 int PatchForest::reach() const {

@@ -33,8 +33,6 @@ struct PatchForest {
     int splitsPerTree() const { return (1 << depth) - 1; }
     int leavesPerTree() const { return 1 << depth; }
     int treeCount() const { return depth > 0 ? static_cast<int>(splits.size()) / splitsPerTree() : 0; }
-    /// The leaf tree `t` reaches from anchor (x, y).
-    int leaf(int t, const cv::Mat& patch, int x, int y) const;
     /// out[0, outputs) = the mean over trees of the leaves reached from (x, y).
     void evaluate(const cv::Mat& patch, int x, int y, float* out) const;
     /// The same as evaluate(patch, x, y, out), read from `padded`: the patch
