@@ -28,8 +28,8 @@ void detectBenchmark(benchmark::State& state, DetectorKind kind) {
 void BM_Detect640x480_YuNet(benchmark::State& state) { detectBenchmark(state, DetectorKind::YuNet); }
 void BM_Detect640x480_Cascade(benchmark::State& state) { detectBenchmark(state, DetectorKind::Cascade); }
 
-BENCHMARK(BM_Detect640x480_YuNet)->Unit(benchmark::kMillisecond)->MinTime(2.0);
-BENCHMARK(BM_Detect640x480_Cascade)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_Detect640x480_YuNet)->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
+BENCHMARK(BM_Detect640x480_Cascade)->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
 
 }  // namespace
 }  // namespace facetrack::bench

@@ -52,7 +52,7 @@ void BM_Fit_Warm(benchmark::State& state) {
     }
     state.counters["iterations"] = benchmark::Counter(iterations, benchmark::Counter::kAvgIterations);
 }
-BENCHMARK(BM_Fit_Warm)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_Fit_Warm)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 void BM_Fit_Cold(benchmark::State& state) {
     const SyntheticClip clip = syntheticClip();
@@ -64,7 +64,7 @@ void BM_Fit_Cold(benchmark::State& state) {
         benchmark::DoNotOptimize(fitter.fit(clip.camera, clip.frames[t], params, false));
     }
 }
-BENCHMARK(BM_Fit_Cold)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_Fit_Cold)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 void BM_Fit_IdentityCalibration30Frames(benchmark::State& state) {
     const SyntheticClip clip = syntheticClip();
@@ -80,7 +80,7 @@ void BM_Fit_IdentityCalibration30Frames(benchmark::State& state) {
         benchmark::DoNotOptimize(fit::calibrateIdentity(*clip.basis, copy, fitter.settings()));
     }
 }
-BENCHMARK(BM_Fit_IdentityCalibration30Frames)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_Fit_IdentityCalibration30Frames)->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
 
 }  // namespace
 }  // namespace facetrack::bench

@@ -54,7 +54,7 @@ void BM_Gaze_BothEyes(benchmark::State& state) {
         benchmark::DoNotOptimize(face.result.gaze);
     }
 }
-BENCHMARK(BM_Gaze_BothEyes)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_Gaze_BothEyes)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 /// The tracking-mode frame of d14 at 640x480, gaze on (the shipped models) or off (no eye model).
 void BM_TrackingFrame640x480_d14(benchmark::State& state) {
@@ -81,7 +81,7 @@ void BM_TrackingFrame640x480_d14(benchmark::State& state) {
     }
     state.SetLabel(std::string(state.range(0) ? "gaze on" : "gaze off") + (models.cnn ? ", CNN file on" : ""));
 }
-BENCHMARK(BM_TrackingFrame640x480_d14)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_TrackingFrame640x480_d14)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(minTime(3.0));
 
 }  // namespace
 }  // namespace facetrack::bench

@@ -46,7 +46,7 @@ void BM_Landmarks_FacetrackLbf(benchmark::State& state) {
         benchmark::DoNotOptimize(landmarks::alignLandmarks(model->data(), in.gray, init));
     }
 }
-BENCHMARK(BM_Landmarks_FacetrackLbf)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_Landmarks_FacetrackLbf)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 /// The tracker's default: the cascade from TrackerConfig::landmark_starts starts, averaged.
 void BM_Landmarks_FacetrackLbfDefaultStarts(benchmark::State& state) {
@@ -60,7 +60,7 @@ void BM_Landmarks_FacetrackLbfDefaultStarts(benchmark::State& state) {
         benchmark::DoNotOptimize(landmarks::alignFromStarts(model->data(), in.gray, init, starts));
     }
 }
-BENCHMARK(BM_Landmarks_FacetrackLbfDefaultStarts)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_Landmarks_FacetrackLbfDefaultStarts)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 void BM_Landmarks_OpenCvFacemarkLbf(benchmark::State& state) {
     const FaceInput in = faceInput();
@@ -81,7 +81,7 @@ void BM_Landmarks_OpenCvFacemarkLbf(benchmark::State& state) {
         benchmark::DoNotOptimize(points);
     }
 }
-BENCHMARK(BM_Landmarks_OpenCvFacemarkLbf)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_Landmarks_OpenCvFacemarkLbf)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 // Detection runs on every frame until tracking lands (the tracker issue).
 void BM_Frame640x480_DetectAndLandmarks(benchmark::State& state) {
@@ -90,7 +90,7 @@ void BM_Frame640x480_DetectAndLandmarks(benchmark::State& state) {
     Tracker tracker(Models::loadDefault());
     for (auto _ : state) benchmark::DoNotOptimize(tracker.process(core::viewOf(in.bgr), 0.0));
 }
-BENCHMARK(BM_Frame640x480_DetectAndLandmarks)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_Frame640x480_DetectAndLandmarks)->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
 
 }  // namespace
 }  // namespace facetrack::bench

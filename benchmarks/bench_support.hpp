@@ -42,6 +42,10 @@ inline std::string benchCascadePath() {
     return std::filesystem::exists(path) ? path : "";
 }
 
+/// A benchmark's minimum time: `seconds`, or next to nothing (one pass) when FACETRACK_BENCH_SMOKE is
+/// set: the smoke test runs every benchmark once, so one that breaks fails CI, and times none.
+inline double minTime(double seconds) { return std::getenv("FACETRACK_BENCH_SMOKE") ? 1e-9 : seconds; }
+
 std::optional<TrackedFrame> trackedFrame(benchmark::State& state, const Models& models, const std::string& clip, int index);
 
 }  // namespace facetrack::bench
