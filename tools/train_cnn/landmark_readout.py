@@ -24,18 +24,15 @@ With --validation, also the held-out 300-W validation faces (a folder of links n
 '/' as '__', tracked as unrelated photos): r, and the contrast between the top tenth of each label and its
 lower half.
 """
-import argparse, csv, glob, json, os
+import argparse, csv, glob, json, os, sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "train_refine"))
+from train_refine import MIRROR, mean_shape, similarity  # noqa: E402
+
 SHAPES = ["browDown_L", "browDown_R", "browInnerUp_L", "browInnerUp_R", "browOuterUp_L", "browOuterUp_R",
           "mouthPucker", "mouthFunnel", "mouthFrown_L", "mouthFrown_R", "jawOpen", "mouthSmile_L", "mouthSmile_R"]
-# The iBUG 68-point mirror permutation.
-MIRROR = (list(range(16, -1, -1)) + list(range(26, 16, -1)) + [27, 28, 29, 30] + [35, 34, 33, 32, 31] +
-          [45, 44, 43, 42, 47, 46] + [39, 38, 37, 36, 41, 40] + [54, 53, 52, 51, 50, 49, 48] +
-          [59, 58, 57, 56, 55] + [64, 63, 62, 61, 60] + [67, 66, 65])
-
-
 def partner(name):
     return name[:-2] + {"_L": "_R", "_R": "_L"}[name[-2:]] if name[-2:] in ("_L", "_R") else name
 
@@ -48,19 +45,17 @@ def arkit_name(native):
 
 
 def aligned(points, mean):
-    """points (68 x 2) by the least-squares similarity onto mean, scaled to unit eye-corner distance."""
-    p = points - points.mean(0)
-    a = (p * mean).sum() / (p ** 2).sum()
-    b = (p[:, 0] * mean[:, 1] - p[:, 1] * mean[:, 0]).sum() / (p ** 2).sum()
-    q = p @ np.array([[a, b], [-b, a]])
+    """points (68 x 2) by the least-squares similarity onto mean (centred), scaled to unit eye-corner distance."""
+    A, t = similarity(points, mean)
+    q = points @ A.T + t
     return q / np.linalg.norm(q[36] - q[45])
 
 
-def mean_shape(shapes):
-    mean = shapes[0] - shapes[0].mean(0)
-    for _ in range(3):
-        mean = np.mean([aligned(s, mean) for s in shapes], 0)
-    return mean
+def reference(shapes):
+    """The training shapes' Procrustes mean, centred, at unit eye-corner distance."""
+    mean = mean_shape(shapes, 1.0)
+    mean -= mean.mean(0)
+    return mean / np.linalg.norm(mean[36] - mean[45])
 
 
 def features(points, mean):
@@ -129,7 +124,7 @@ def main():
     faces = {r["key"]: r for r in csv.DictReader(open(os.path.join(a.dense, "faces300w.csv")))}
     frames = {r["key"]: r for r in csv.DictReader(open(os.path.join(a.dense, "clips.csv")))}
     shapes, targets = training_faces(a.points, faces)
-    mean = mean_shape(shapes)
+    mean = reference(shapes)
     readout = train(np.array([features(s, mean) for s in shapes]), targets, mean, a.ridge)
     print(f"readout trained on {len(shapes)} 300-W training faces (and their mirror images), ridge {a.ridge:g}")
 
