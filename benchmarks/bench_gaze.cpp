@@ -31,7 +31,7 @@ Models benchModels() {
 void BM_Gaze_BothEyes(benchmark::State& state) {
     Models models = benchModels();
     if (!models.eyes) {
-        state.SkipWithError("no eye model");
+        failBenchmark(state, "no eye model (models/eye_model.ftm is shipped)");
         return;
     }
     const auto tracked = trackedFrame(state, models, "liveportrait_d14_gaze_shifts.mp4", 40);

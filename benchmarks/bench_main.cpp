@@ -7,6 +7,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <cstdio>
+
 namespace facetrack::bench {
 
 cv::Mat clipFrame(const std::string& clip, int index, int width, int height) {
@@ -28,6 +30,15 @@ bool skipWithoutShared(benchmark::State& state, const cv::Mat& frame) {
     return true;
 }
 
+namespace {
+int brokenBenchmarks = 0;
+}  // namespace
+
+void failBenchmark(benchmark::State& state, const std::string& why) {
+    ++brokenBenchmarks;
+    state.SkipWithError(("broken: " + why).c_str());
+}
+
 pipeline::FrameInput TrackedFrame::input() const { return {core::viewOf(frame), gray, camera, 1.0 / 30.0}; }
 
 std::optional<TrackedFrame> trackedFrame(benchmark::State& state, const Models& models, const std::string& clip, int index) {
@@ -37,7 +48,7 @@ std::optional<TrackedFrame> trackedFrame(benchmark::State& state, const Models& 
     Tracker tracker(models);
     for (int i = 0; i < 5; ++i) tracker.process(core::viewOf(t.frame), i / 30.0, t.result);
     if (t.result.faces.empty()) {
-        state.SkipWithError("no face in the frame");
+        failBenchmark(state, "no face in frame " + std::to_string(index) + " of " + clip);
         return std::nullopt;
     }
     cv::cvtColor(t.frame, t.gray, cv::COLOR_BGR2GRAY);
@@ -54,5 +65,10 @@ int main(int argc, char** argv) {
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
+    if (facetrack::bench::brokenBenchmarks > 0) {
+        std::fprintf(stderr, "facetrack_bench: %d benchmark(s) broken (reported as \"broken: ...\" above)\n",
+                     facetrack::bench::brokenBenchmarks);
+        return 1;
+    }
     return 0;
 }

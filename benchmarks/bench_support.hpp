@@ -24,6 +24,11 @@ cv::Mat clipFrame(const std::string& clip, int index, int width, int height);
 /// Marks the benchmark skipped when the frame could not be loaded; true if so.
 bool skipWithoutShared(benchmark::State& state, const cv::Mat& frame);
 
+/// Stops a benchmark whose setup is broken (a shipped model missing, no face where one is): it is
+/// reported like a skip, but the run then exits with status 1, so the smoke test fails. A missing
+/// optional input (../shared, a peer's model, a CNN file that is not shipped) is a skip instead.
+void failBenchmark(benchmark::State& state, const std::string& why);
+
 /// A frame after a few frames of tracking with `models`: a stage's input, to
 /// run one stage alone on a followed face.
 struct TrackedFrame {
