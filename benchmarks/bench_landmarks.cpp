@@ -49,7 +49,7 @@ void BM_Landmarks_FacetrackLbf(benchmark::State& state) {
 }
 BENCHMARK(BM_Landmarks_FacetrackLbf)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
-/// Writes `bytes` of scratch memory, untimed: the caches then hold none of the model.
+/// Writes to every cache line of `scratch`, untimed: the caches then hold none of the model.
 void evictCaches(benchmark::State& state, std::vector<char>& scratch) {
     state.PauseTiming();
     for (std::size_t i = 0; i < scratch.size(); i += 64) scratch[i] = static_cast<char>(scratch[i] + 1);

@@ -5,7 +5,7 @@ import os, sys, unittest
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "train_cnn"))
-from label_mirror_consistency import RELIABILITY_SHAPES, partner, rodrigues  # noqa: E402
+from label_mirror_consistency import RELIABILITY_SHAPES, partner, rotation  # noqa: E402
 import label_mirror_consistency as mc  # noqa: E402
 
 SHAPES = sorted(set(RELIABILITY_SHAPES) | {partner(s) for s in RELIABILITY_SHAPES})
@@ -31,10 +31,10 @@ class Consistency(unittest.TestCase):
         """Random labels, and their mirror images turned by a further extra_deg about the x axis."""
         rng = np.random.default_rng(1)
         M = np.diag([-1.0, 1.0, 1.0])
-        extra = rodrigues(np.radians([extra_deg, 0.0, 0.0]))
+        extra = rotation(np.radians([extra_deg, 0.0, 0.0]))
         original, mirrored = {}, {}
         for k in range(50):
-            R = rodrigues(rng.normal(0, 0.3, 3))
+            R = rotation(rng.normal(0, 0.3, 3))
             w = {s: rng.uniform(0, 1) for s in SHAPES}
             euler = rng.normal(0, 10, 3)
             original[str(k)] = row(axis_angle(R), w, euler)

@@ -24,24 +24,12 @@ import csv, json, os, shutil, sys
 
 import numpy as np
 
+from label_pose_noise import angle_deg, rotation
+
 
 # The shapes issue 16 asks r >= 0.8 for.
 RELIABILITY_SHAPES = ["jawOpen", "mouthSmile_L", "mouthSmile_R", "mouthPucker", "mouthFunnel", "browInnerUp_L",
                       "browInnerUp_R", "browDown_L", "browDown_R"]
-
-
-def rodrigues(w):
-    theta = np.linalg.norm(w)
-    if theta < 1e-12:
-        return np.eye(3)
-    k = w / theta
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + np.sin(theta) * K + (1 - np.cos(theta)) * K @ K
-
-
-def angle_deg(A, B):
-    c = (np.trace(A.T @ B) - 1) / 2
-    return np.degrees(np.arccos(np.clip(c, -1, 1)))
 
 
 def partner(name):
@@ -117,8 +105,8 @@ def consistency(original, mirrored, keys):
     rot, euler, weights = [], [], []
     for k in keys:
         a, b = original[k], mirrored[k]
-        Ra = rodrigues(np.array([float(a["omega_" + c]) for c in "xyz"]))
-        Rb = rodrigues(np.array([float(b["omega_" + c]) for c in "xyz"]))
+        Ra = rotation(np.array([float(a["omega_" + c]) for c in "xyz"]))
+        Rb = rotation(np.array([float(b["omega_" + c]) for c in "xyz"]))
         rot.append(angle_deg(M @ Ra @ M, Rb))
         euler.append([float(a["pitch_deg"]) - float(b["pitch_deg"]), float(a["yaw_deg"]) + float(b["yaw_deg"]),
                       float(a["roll_deg"]) + float(b["roll_deg"])])
