@@ -6,8 +6,8 @@ predictions, not ground truth. A photograph and its mirror image show the same h
 be mirror images too: R' = M R M with M = diag(-1, 1, 1) (yaw and roll change sign, pitch stays), and each
 sided shape's weight moves to its partner. Whatever differs is error of the teacher or of the labeller; of
 the two labels at least one is wrong by half the difference or more, so the difference bounds the labels'
-own error from below. It is what keeps any net trained on them from agreeing with them to within a few
-degrees (the robustness target of issue 17).
+own error from below: how often an exact pose could be within 3 deg of them (the robustness target of
+issue 17), and how well any estimate could correlate with their expressions (the r targets of issue 16).
 
 The teacher reads each crop mirrored in memory (no re-encoding), from a copy of its tool that
 `prepare` makes in build/teacher_tool with that one change (the environment variable MIRROR); `prepare`
