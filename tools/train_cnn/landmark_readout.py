@@ -30,13 +30,10 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "train_refine"))
 from train_refine import MIRROR, mean_shape, similarity  # noqa: E402
+from label_mirror_consistency import partner  # noqa: E402
 
 SHAPES = ["browDown_L", "browDown_R", "browInnerUp_L", "browInnerUp_R", "browOuterUp_L", "browOuterUp_R",
           "mouthPucker", "mouthFunnel", "mouthFrown_L", "mouthFrown_R", "jawOpen", "mouthSmile_L", "mouthSmile_R"]
-
-
-def partner(name):
-    return name[:-2] + {"_L": "_R", "_R": "_L"}[name[-2:]] if name[-2:] in ("_L", "_R") else name
 
 
 def arkit_name(native):
