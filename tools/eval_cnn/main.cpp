@@ -22,6 +22,11 @@
 // of the annotation's box (large poses).
 //
 // The rounds are the cascade's: each stage run as often as the file says.
+//
+//   build/tools/eval_cnn --tracker [--starts 5] [--split validation] [--yaw-deg 15] [--depth 0.1]
+//
+// With --tracker, the same target for the pipeline that shipped instead (LBF, the
+// landmark refiner, the fit; no cascade stages): trackerRobustness() below.
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
@@ -41,6 +46,7 @@
 #include "profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <memory>
@@ -92,12 +98,161 @@ void report(const char* name, RoundErrors e) {
                 mean(e.depth_pct), mean(e.expression));
 }
 
+/// The rotations within 3 deg of their reference, percent.
+double within3(const std::vector<double>& rotationDeg) {
+    const auto n = std::count_if(rotationDeg.begin(), rotationDeg.end(), [](double x) { return x < 3.0; });
+    return rotationDeg.empty() ? 0.0 : 100.0 * static_cast<double>(n) / static_cast<double>(rotationDeg.size());
+}
+
+double medianOf(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
+/// --tracker: the robustness target for the pipeline that shipped (LBF, the
+/// landmark refiner, the fit; docs/cnn.md). A followed face whose previous
+/// frame sat `yaw` and `scale` away: frame 1 is the crop profiled to its label
+/// turned by d ~ U(-Y, Y) deg (profile::turnedBy; copies more than 15 % hidden
+/// are drawn again) and scaled by 1 + U(-D, D) about its annotation's centre,
+/// found by YuNet; frame 2 is the crop itself, followed with no detection.
+/// Frame 2's pose is compared with
+///   - the label, after the mean rotation C between the tracker's poses and the
+///     labels on the training crops (R_tracker ~ R_label C: the fit and the
+///     teacher's mesh put the head's axes a few degrees apart, mostly in pitch);
+///   - frame 2's pose when frame 1 is the crop itself (label-free: how often
+///     the perturbed start leaves the answer within 3 deg of the unperturbed one).
+void trackerRobustness(const std::string& split, int starts, double yawDeg, double depth, const dense::LabelTable& table,
+                       const std::string& root) {
+    const auto model = FaceModel::loadDefault();
+    std::vector<std::string> labelled;  // the model's expressions the labels have (not the gaze stage's eyeLook shapes)
+    for (const auto& name : model->expressionNames())
+        if (std::find(table.columns.begin(), table.columns.end(), name) != table.columns.end()) labelled.push_back(name);
+    const dense::LabelColumns columns = dense::labelColumns(table, labelled);
+    const std::vector<int> labelledIds = cnn::expressionIndices(model->expressionNames(), labelled);
+    TrackerConfig still;
+    still.filter.enabled = false;  // frame 2's pose is its own, not smoothed towards frame 1's
+    Tracker tracker(Models::loadDefault(), still);
+    DetectorConfig yunet;
+    yunet.kind = DetectorKind::YuNet;
+    const auto detector = createFaceDetector(yunet);  // boxes as eval-landmarks takes them: the one on the annotated face
+    FrameResult result;
+    const auto view = [](const cv::Mat& m) { return ImageView{m.data, m.cols, m.rows, m.step, PixelFormat::Gray8}; };
+    // Frame 2's rotation after `first` (found by YuNet, as the face on `annotated`), then `second` followed.
+    const auto followed = [&](const cv::Mat& first, const core::Shape2& annotated, const cv::Mat& second, Eigen::Matrix3d& rotation) {
+        const auto box = tools::matchingBox(detector->detect(view(first)), annotated);
+        if (!box) return false;
+        tracker.reset();
+        tracker.process(view(first), 0.0, {*box}, result);
+        if (second.data) tracker.process(view(second), 1.0 / 30.0, {}, result);
+        if (result.faces.empty() || !result.faces[0].pose) return false;
+        fit::FaceParams p;
+        std::vector<int> none;
+        cnn::readParams(*result.faces[0].pose, {}, none, p);
+        rotation = fit::rotationOf(p.omega());
+        return true;
+    };
+    const auto angleDeg = [](const Eigen::Matrix3d& r) { return Eigen::AngleAxisd(r).angle() * 180.0 / M_PI; };
+    struct Crop {
+        cv::Mat grey;
+        core::Shape2 annotated;
+        fit::FaceParams label;
+        Eigen::VectorXd identity;
+    };
+    const auto load = [&](const dense::LabelTable::Row& row) {
+        Crop c;
+        c.grey = cv::imread(root + "/" + row.key, cv::IMREAD_GRAYSCALE);
+        if (c.grey.empty()) throw Error("cannot read " + root + "/" + row.key);
+        c.annotated = core::readPts(root + "/" + row.key.substr(0, row.key.rfind('.')) + ".pts");
+        if (c.annotated.cols() != 68) throw Error(row.key + ": its .pts does not have 68 points");
+        c.label = dense::labelParams(columns, row);
+        c.identity = dense::labelIdentity(columns, row);
+        return c;
+    };
+
+    // C: the mean of R_label^T R_tracker over the training crops found afresh, projected onto SO(3).
+    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+    int trainCrops = 0;
+    for (const auto& row : table.rows) {
+        if (row.split != "train") continue;
+        const Crop c = load(row);
+        Eigen::Matrix3d r;
+        if (!followed(c.grey, c.annotated, cv::Mat(), r)) continue;
+        sum += fit::rotationOf(c.label.omega()).transpose() * r;
+        if (++trainCrops % 100 == 0) std::fprintf(stderr, "\r%d training crops", trainCrops);
+    }
+    if (trainCrops == 0) throw Error("no training crops with a face: the offset between the tracker's and the labels' axes needs them");
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d offset = svd.matrixU() * svd.matrixV().transpose();
+    if (offset.determinant() < 0) offset = svd.matrixU() * Eigen::Vector3d(1, 1, -1).asDiagonal() * svd.matrixV().transpose();
+
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> sym(-1.0, 1.0);
+    std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel;
+    int crops = 0, lostOnCopy = 0, unfollowed = 0;
+    for (const auto& row : table.rows) {
+        if (row.split != split) continue;
+        const Crop c = load(row);
+        const fit::Camera camera = fit::cameraFor(c.grey.cols, c.grey.rows, 60.0, 0.0);
+        const std::vector<float> identity(c.identity.data(), c.identity.data() + c.identity.size());
+        const std::vector<float> expression = profile::nativeWeights(*model, labelledIds, c.label.expression);
+        const Eigen::Matrix3d labelRotation = fit::rotationOf(c.label.omega()) * offset;
+        ++crops;
+        Eigen::Matrix3d unperturbed;
+        const bool haveUnperturbed = followed(c.grey, c.annotated, c.grey, unperturbed);
+        if (haveUnperturbed) unperturbedToLabel.push_back(angleDeg(unperturbed * labelRotation.transpose()));
+        else ++unfollowed;
+        const Eigen::Vector2f centre = 0.5f * (c.annotated.rowwise().minCoeff() + c.annotated.rowwise().maxCoeff());
+        for (int s = 0; s < starts; ++s) {
+            profile::ProfiledFace copy;
+            fit::FaceParams turned;
+            for (int draw = 0; draw < 20; ++draw) {
+                turned = profile::turnedBy(c.label, yawDeg * sym(rng));
+                copy = profile::profileFace(*model, c.grey, camera, identity, expression, c.label, turned);
+                if (copy.hidden_share <= 0.15) break;
+            }
+            const double k = 1.0 + depth * sym(rng);
+            const cv::Matx23d scaling(k, 0, centre.x() * (1 - k), 0, k, centre.y() * (1 - k));
+            cv::Mat first;
+            cv::warpAffine(copy.image, first, scaling, copy.image.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+            startDeg.push_back(rotationErrorDeg(turned, c.label));
+            const core::Shape2 moved = (c.annotated * static_cast<float>(k)).colwise() + centre * static_cast<float>(1 - k);
+            Eigen::Matrix3d r;
+            if (!followed(first, moved, c.grey, r)) {
+                ++lostOnCopy;
+                continue;
+            }
+            toLabel.push_back(angleDeg(r * labelRotation.transpose()));
+            if (haveUnperturbed) toUnperturbed.push_back(angleDeg(r * unperturbed.transpose()));
+        }
+        if (crops % 20 == 0) std::fprintf(stderr, "\r%d %s crops", crops, split.c_str());
+    }
+    std::fprintf(stderr, "\r");
+    const Eigen::Vector3d offsetDeg = fit::eulerDegrees(Eigen::AngleAxisd(offset).angle() * Eigen::AngleAxisd(offset).axis());
+    std::printf("the shipped tracker (dense teacher labels, not ground truth); C from %d training crops: %.2f deg "
+                "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
+                trainCrops, angleDeg(offset), offsetDeg.x(), offsetDeg.y(), offsetDeg.z());
+    const auto line = [](const char* name, const std::vector<double>& deg) {
+        std::printf("  %-44s %5zu, mean %5.2f median %5.2f deg, within 3 deg %5.1f %%\n", name, deg.size(), meanOf(deg), medianOf(deg),
+                    within3(deg));
+    };
+    std::printf("%d %s crops x %d starts: frame 1 the crop turned by yaw +-%.0f deg (uniform) and scaled by +-%.0f %%, frame 2 the crop, "
+                "followed (%d starts not found on frame 1; %d crops not followed unperturbed)\n",
+                crops, split.c_str(), starts, yawDeg, 100.0 * depth, lostOnCopy, unfollowed);
+    line("start (frame 1's pose) to the label", startDeg);
+    line("frame 2 to the label (after C)", toLabel);
+    line("unperturbed (frame 1 the crop) to the label", unperturbedToLabel);
+    line("frame 2 to the unperturbed (label-free)", toUnperturbed);
+}
+
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--cascade", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w", "--profiled"}, {"--help"});
+                           {"--cascade", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w", "--profiled"},
+                           {"--help", "--tracker"});
     if (args.has("--help")) {
         std::puts("usage: eval_cnn [--cascade models/cnn_cascade.ftm] [--starts 5] [--split validation]\n"
-                  "       [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--faces300w DIR] [--profiled N]");
+                  "       [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--faces300w DIR] [--profiled N]\n"
+                  "       eval_cnn --tracker [--starts 5] [--split validation] [--yaw-deg 15] [--depth 0.1] [--labels DIR] [--faces300w DIR]");
         return 0;
     }
     const std::string split = args.get("--split", "validation");
@@ -105,6 +260,11 @@ int run(int argc, char** argv) {
     const int starts = args.integer("--starts", 5);
     const double yawDeg = args.number("--yaw-deg", 15.0), depth = args.number("--depth", 0.10);
     if (starts < 1) throw Error("--starts must be at least 1");
+    if (args.has("--tracker")) {
+        trackerRobustness(split, starts, yawDeg, depth, dense::readLabelTable(args.get("--labels", "build/dense_labels") + "/faces300w.csv"),
+                          tools::faces300wRoot(args.get("--faces300w", "")));
+        return 0;
+    }
 
     const auto model = FaceModel::loadDefault();  // the shipped tracker's: with the landmark convention
     const auto cascade = CnnModel::load(args.get("--cascade", CnnModel::defaultPath()));
@@ -112,7 +272,8 @@ int run(int argc, char** argv) {
     if (data.stages.empty()) {
         throw Error("'" + args.get("--cascade", CnnModel::defaultPath()) +
                     "' has no cascade stages (a landmark refiner alone): for its landmarks, large poses included, use "
-                    "`facetrack eval-landmarks` on 300-W and on build/tools/make_profiled_faces's sets");
+                    "`facetrack eval-landmarks` on 300-W and on build/tools/make_profiled_faces's sets; for the shipped "
+                    "tracker's robustness, eval_cnn --tracker");
     }
     const std::vector<int> expressionIds = cnn::expressionIndices(model->expressionNames(), data.expressions);
     const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), expressionIds, data.patch_size);
