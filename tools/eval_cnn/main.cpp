@@ -85,19 +85,6 @@ void reportLandmarks(const char* name, const LandmarkErrors& e) {
                 e.dropped ? (" (" + std::to_string(e.dropped) + " dropped: LBF's)").c_str() : "");
 }
 
-void report(const char* name, RoundErrors e) {
-    if (e.rotation_deg.empty()) {
-        std::printf("%-8s no faces\n", name);
-        return;
-    }
-    const auto mean = meanOf;
-    const double within = static_cast<double>(std::count_if(e.rotation_deg.begin(), e.rotation_deg.end(), [](double x) { return x < 3.0; }));
-    std::nth_element(e.rotation_deg.begin(), e.rotation_deg.begin() + static_cast<std::ptrdiff_t>(e.rotation_deg.size() / 2), e.rotation_deg.end());
-    std::printf("%-8s rotation mean %5.2f median %5.2f deg, within 3 deg %5.1f %%; depth %5.2f %%; expression MAE %.4f\n", name,
-                mean(e.rotation_deg), e.rotation_deg[e.rotation_deg.size() / 2], 100.0 * within / static_cast<double>(e.rotation_deg.size()),
-                mean(e.depth_pct), mean(e.expression));
-}
-
 /// The rotations within 3 deg of their reference, percent.
 double within3(const std::vector<double>& rotationDeg) {
     const auto n = std::count_if(rotationDeg.begin(), rotationDeg.end(), [](double x) { return x < 3.0; });
@@ -108,6 +95,15 @@ double medianOf(std::vector<double> v) {
     if (v.empty()) return 0.0;
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
+}
+
+void report(const char* name, const RoundErrors& e) {
+    if (e.rotation_deg.empty()) {
+        std::printf("%-8s no faces\n", name);
+        return;
+    }
+    std::printf("%-8s rotation mean %5.2f median %5.2f deg, within 3 deg %5.1f %%; depth %5.2f %%; expression MAE %.4f\n", name,
+                meanOf(e.rotation_deg), medianOf(e.rotation_deg), within3(e.rotation_deg), meanOf(e.depth_pct), meanOf(e.expression));
 }
 
 /// --tracker: the robustness target for the pipeline that shipped (LBF, the
@@ -138,7 +134,8 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     const auto detector = createFaceDetector(yunet);  // boxes as eval-landmarks takes them: the one on the annotated face
     FrameResult result;
     const auto view = [](const cv::Mat& m) { return ImageView{m.data, m.cols, m.rows, m.step, PixelFormat::Gray8}; };
-    // Frame 2's rotation after `first` (found by YuNet, as the face on `annotated`), then `second` followed.
+    // Frame 2's rotation: `first` (found by YuNet, as the face on `annotated`), then `second` followed;
+    // with no `second`, frame 1's.
     const auto followed = [&](const cv::Mat& first, const core::Shape2& annotated, const cv::Mat& second, Eigen::Matrix3d& rotation) {
         const auto box = tools::matchingBox(detector->detect(view(first)), annotated);
         if (!box) return false;
