@@ -117,7 +117,9 @@ void report(const char* name, const RoundErrors& e) {
 ///     labels on the training crops (R_tracker ~ R_label C: the fit and the
 ///     teacher's mesh put the head's axes a few degrees apart, mostly in pitch);
 ///   - frame 2's pose when frame 1 is the crop itself (label-free: how often
-///     the perturbed start leaves the answer within 3 deg of the unperturbed one).
+///     the perturbed start leaves the answer within 3 deg of the unperturbed one);
+///     as a control, when frame 1 is the crop profiled at its own pose (what the
+///     re-rendering alone changes).
 void trackerRobustness(const std::string& split, int starts, double yawDeg, double depth, const dense::LabelTable& table,
                        const std::string& root) {
     const auto model = FaceModel::loadDefault();
@@ -185,7 +187,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
 
     std::mt19937 rng(23);
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
-    std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel;
+    std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel, controlToUnperturbed;
     int crops = 0, lostOnCopy = 0, unfollowed = 0;
     for (const auto& row : table.rows) {
         if (row.split != split) continue;
@@ -199,6 +201,11 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         const bool haveUnperturbed = followed(c.grey, c.annotated, c.grey, unperturbed);
         if (haveUnperturbed) unperturbedToLabel.push_back(angleDeg(unperturbed * labelRotation.transpose()));
         else ++unfollowed;
+        // Control: frame 1 the crop profiled at its own pose, what profiling alone changes.
+        const cv::Mat rendered = profile::profileFace(*model, c.grey, camera, identity, expression, c.label, c.label).image;
+        Eigen::Matrix3d control;
+        if (haveUnperturbed && followed(rendered, c.annotated, c.grey, control))
+            controlToUnperturbed.push_back(angleDeg(control * unperturbed.transpose()));
         const Eigen::Vector2f centre = 0.5f * (c.annotated.rowwise().minCoeff() + c.annotated.rowwise().maxCoeff());
         for (int s = 0; s < starts; ++s) {
             profile::ProfiledFace copy;
@@ -230,7 +237,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
                 "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
                 trainCrops, angleDeg(offset), offsetDeg.x(), offsetDeg.y(), offsetDeg.z());
     const auto line = [](const char* name, const std::vector<double>& deg) {
-        std::printf("  %-44s %5zu, mean %5.2f median %5.2f deg, within 3 deg %5.1f %%\n", name, deg.size(), meanOf(deg), medianOf(deg),
+        std::printf("  %-54s %5zu, mean %5.2f median %5.2f deg, within 3 deg %5.1f %%\n", name, deg.size(), meanOf(deg), medianOf(deg),
                     within3(deg));
     };
     std::printf("%d %s crops x %d starts: frame 1 the crop turned by yaw +-%.0f deg (uniform) and scaled by +-%.0f %%, frame 2 the crop, "
@@ -240,6 +247,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     line("frame 2 to the label (after C)", toLabel);
     line("unperturbed (frame 1 the crop) to the label", unperturbedToLabel);
     line("frame 2 to the unperturbed (label-free)", toUnperturbed);
+    line("control: frame 1 profiled unturned, to the unperturbed", controlToUnperturbed);
 }
 
 int run(int argc, char** argv) {
