@@ -122,7 +122,8 @@ void report(const char* name, const RoundErrors& e) {
 ///     re-rendering alone changes).
 void trackerRobustness(const std::string& split, int starts, double yawDeg, double depth, const dense::LabelTable& table,
                        const std::string& root) {
-    const auto model = FaceModel::loadDefault();
+    const Models shipped = Models::loadDefault();
+    const auto& model = shipped.face;
     std::vector<std::string> labelled;  // the model's expressions the labels have (not the gaze stage's eyeLook shapes)
     for (const auto& name : model->expressionNames())
         if (std::find(table.columns.begin(), table.columns.end(), name) != table.columns.end()) labelled.push_back(name);
@@ -130,7 +131,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     const std::vector<int> labelledIds = cnn::expressionIndices(model->expressionNames(), labelled);
     TrackerConfig still;
     still.filter.enabled = false;  // frame 2's pose is its own, not smoothed towards frame 1's
-    Tracker tracker(Models::loadDefault(), still);
+    Tracker tracker(shipped, still);
     DetectorConfig yunet;
     yunet.kind = DetectorKind::YuNet;
     const auto detector = createFaceDetector(yunet);  // boxes as eval-landmarks takes them: the one on the annotated face
