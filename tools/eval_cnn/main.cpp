@@ -58,8 +58,11 @@ using namespace facetrack;
 
 namespace {
 
+/// The rotation angle of `r`, degrees.
+double angleDeg(const Eigen::Matrix3d& r) { return Eigen::AngleAxisd(r).angle() * 180.0 / M_PI; }
+
 double rotationErrorDeg(const fit::FaceParams& a, const fit::FaceParams& b) {
-    return Eigen::AngleAxisd(fit::rotationOf(a.omega()) * fit::rotationOf(b.omega()).transpose()).angle() * 180.0 / M_PI;
+    return angleDeg(fit::rotationOf(a.omega()) * fit::rotationOf(b.omega()).transpose());
 }
 
 struct RoundErrors {
@@ -152,7 +155,6 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         rotation = fit::rotationOf(p.omega());
         return true;
     };
-    const auto angleDeg = [](const Eigen::Matrix3d& r) { return Eigen::AngleAxisd(r).angle() * 180.0 / M_PI; };
     struct Crop {
         cv::Mat grey;
         core::Shape2 annotated;
@@ -233,6 +235,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         if (crops % 20 == 0) std::fprintf(stderr, "\r%d %s crops", crops, split.c_str());
     }
     std::fprintf(stderr, "\r");
+    if (crops == 0) throw Error("no crops in split '" + split + "'");
     const Eigen::Vector3d offsetDeg = fit::eulerDegrees(Eigen::AngleAxisd(offset).angle() * Eigen::AngleAxisd(offset).axis());
     std::printf("the shipped tracker (dense teacher labels, not ground truth); C from %d training crops: %.2f deg "
                 "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
