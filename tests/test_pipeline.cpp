@@ -265,37 +265,60 @@ TEST_F(StageRunner, VerificationDropsAFaceTheDetectorNoLongerSees) {
     EXPECT_EQ(names(r), (std::vector<std::string>{"detect", "verify"}));  // verified, lost, searched again
 }
 
-// A face a stage doubts is checked with the detector in the same frame: seen
-// elsewhere, the stages run again from the detection (same id, reported as
-// found); seen where it is, or not seen at all, the face stays as it was.
+// A stage that doubts a followed face runs once more in the same frame, with
+// the stages before it, from where the first pass left the face; the stages
+// after it run once. Each stage's time covers both of its runs.
+TEST_F(StageRunner, AStageInDoubtRunsAgainWithTheStagesBeforeIt) {
+    build({"a", "b", "c"});
+    fakes[1]->doubt_on = {1};
+    step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "c"}));
+    FrameResult r = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "a", "b", "c"}));
+    EXPECT_EQ(names(r), (std::vector<std::string>{"a", "b", "c"}));
+    EXPECT_EQ(fakes[0]->seen.runs, 3);  // its state carried from the first pass to the second
+    EXPECT_EQ(r.faces.at(0).box.x0, 20.f + 3 + 5);  // three stages, then two again
+    step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "c"}));
+
+    fakes[1]->fail_on = {3};  // lost in the first pass: not run again, but found again by the detector (fresh: run once)
+    fakes[1]->doubt_on = {3};
+    r = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "a", "b"}));
+}
+
+// A face a stage doubts (and ran again, above) is checked with the detector in
+// the same frame: seen elsewhere, the stages run again from the detection (same
+// id, reported as found); seen where it is, or not seen at all, the face stays
+// as the second pass left it.
 TEST_F(StageRunner, AFaceInDoubtIsCheckedAndRestartsWhereTheDetectorSeesIt) {
     build({"a"}, 30);
     fakes[0]->doubt_on = {2, 3, 4};
     const int id = step().faces.at(0).id;  // the detector's box, 20..60, moved to 21..61
     step();                                // 22..62
-    fakes[0]->doubt_jump = 12.f;           // frame 2: the stage slides to 35..75 and doubts it
+    fakes[0]->doubt_jump = 6.f;            // frame 2: the stage slides to 29..69, doubts it, slides again to 36..76
     FrameResult r = step();
-    EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));  // run again from the detection
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "a", "a"}));  // run again, then from the detection
     EXPECT_EQ(detections, 2);
     ASSERT_EQ(r.faces.size(), 1u);
     EXPECT_EQ(r.faces[0].id, id);
     EXPECT_FALSE(r.faces[0].tracked);
-    EXPECT_EQ(r.faces[0].box.x0, 21.f);    // the detection, moved once
+    EXPECT_EQ(r.faces[0].box.x0, 21.f);    // the detection, moved once (a fresh face is not run again)
     EXPECT_EQ(names(r), (std::vector<std::string>{"verify", "a"}));
 
     fakes[0]->doubt_jump = 0.f;            // frame 3: doubted where the detector sees it
     r = step();
-    EXPECT_EQ(log, (std::vector<std::string>{"a"}));
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));
     EXPECT_EQ(detections, 3);
     EXPECT_TRUE(r.faces.at(0).tracked);
-    EXPECT_EQ(r.faces[0].box.x0, 22.f);
+    EXPECT_EQ(r.faces[0].box.x0, 23.f);
 
     present = false;                       // frame 4: doubted, the detector sees nothing: kept
     fakes[0]->doubt_jump = 12.f;
     r = step();
-    EXPECT_EQ(log, (std::vector<std::string>{"a"}));
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));
     ASSERT_EQ(r.faces.size(), 1u);
-    EXPECT_EQ(r.faces[0].box.x0, 35.f);
+    EXPECT_EQ(r.faces[0].box.x0, 49.f);
 }
 
 // The detection 8 px (0.2 of the 40 px box) across from the face: a periodic check lets it be (a
@@ -314,9 +337,9 @@ TEST_F(StageRunner, AFaceInDoubtMustAgreeWithTheDetectorMoreCloselyThanAPeriodic
     frame = 0;
     step();                        // 21..61
     step();                        // 22..62
-    fakes[0]->doubt_jump = 5.f;    // frame 2: the stage moves it to 28..68 and doubts it
+    fakes[0]->doubt_jump = 5.f;    // frame 2: the stage moves it to 28..68 and doubts it (and again to 34..74)
     r = step();
-    EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));  // run again from the detection
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "a", "a"}));  // run again, then from the detection
     EXPECT_FALSE(r.faces.at(0).tracked);
     EXPECT_EQ(r.faces[0].box.x0, 21.f);
 }

@@ -4,6 +4,7 @@
 #include "landmarks/lbf.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/tracker.hpp"
+#include "common/faces300w.hpp"
 #include "common/finite_result.hpp"
 #include "test_support.hpp"
 
@@ -222,33 +223,56 @@ Tracker landmarksOnlyTracker(TrackerConfig config = {}) {
     return Tracker(Models{shipped.face, shipped.landmarks, nullptr, nullptr}, config);
 }
 
+/// Above this NME (of the eye-corner distance) the landmarks are not on the face.
+constexpr double kNotFoundNme = 0.2;
+
+// The shipped tracker (the refiner on), filter off, given the annotated face's
+// box on the first of five copies of a photograph: the fifth's landmarks are
+// as good as the first's. 35 faces: 3.15 % -> 3.15 %; on all 223 lfpw test
+// faces 3.26 -> 3.35 %. Without the refiner (LBF and the fit) following costs
+// more: 3.15 -> 3.32 %, 223 faces 3.39 -> 3.62 % (docs/landmarks.md, Initialisation).
 TEST(Tracker, FollowingAStillFaceKeepsItsLandmarkAccuracy) {
     FACETRACK_REQUIRE_PIPELINE();
-    Tracker tracker = landmarksOnlyTracker();
+    TrackerConfig still;
+    still.filter.enabled = false;
+    Tracker tracker(Models::loadDefault(), still);
     DetectorConfig yunet;
     yunet.kind = DetectorKind::YuNet;
     auto detector = createFaceDetector(yunet);
     double found = 0, followed = 0;
-    int faces = 0;
+    int faces = 0, missed = 0;
     FrameResult result;
     for (const auto& [number, stem] : test::lfpwTestFaces(40)) {
         const cv::Mat bgr = cv::imread(stem + ".jpg");
         const core::Shape2 truth = core::readPts(stem + ".pts");
-        const auto boxes = detector->detect(core::viewOf(bgr));
-        ASSERT_FALSE(boxes.empty()) << stem;
+        // The annotated face's box: a photograph may hold other faces.
+        const auto box = tools::matchingBox(detector->detect(core::viewOf(bgr)), truth);
+        if (!box) continue;
         tracker.reset();
+        double first = kNotFoundNme + 1, last = 0;
         for (int frame = 0; frame < 5; ++frame) {
-            tracker.process(core::viewOf(bgr), frame / 30.0, frame == 0 ? std::vector<Box>{boxes[0].box} : std::vector<Box>{}, result);
+            tracker.process(core::viewOf(bgr), frame / 30.0, frame == 0 ? std::vector<Box>{*box} : std::vector<Box>{}, result);
+            if (frame == 0 && result.faces.empty()) break;  // not found: `first` stays above kNotFoundNme
             ASSERT_EQ(result.faces.size(), 1u) << stem << " frame " << frame;
             const double nme = core::nme68(core::Shape2(landmarks::fromLandmarks68(*result.faces[0].landmarks)), truth);
-            if (frame == 0) found += nme;
-            if (frame == 4) followed += nme;
+            (frame == 0 ? first : last) = nme;
         }
+        // A face the first frame did not find (image_0016: YuNet's box spans two
+        // faces, NME 78 %) says nothing about following one; its NME would
+        // outweigh all the others'.
+        if (first > kNotFoundNme) {
+            ++missed;
+            continue;
+        }
+        found += first;
+        followed += last;
         ++faces;
     }
     ASSERT_GE(faces, 30);
-    std::printf("%d lfpw test faces: mean NME %.2f %% found, %.2f %% after five frames followed\n", faces, 100 * found / faces,
-                100 * followed / faces);
+    EXPECT_LE(missed, 2);
+    std::printf("%d lfpw test faces (%d not found on the first frame, left out): mean NME %.2f %% found, %.2f %% after five "
+                "frames followed\n",
+                faces, missed, 100 * found / faces, 100 * followed / faces);
     EXPECT_LT(followed, 1.05 * found);
 }
 

@@ -33,6 +33,7 @@ struct FitFaceState final : pipeline::StageState {
     bool fitted = false;
     std::vector<CalibrationFrame> window;  // identity calibration samples, the first `samples` taken
     std::size_t samples = 0;
+    int sampled_age = -1;  // a frame the tracker runs twice (a doubtful one) is sampled once
     bool calibrated = false;
 };
 
@@ -94,10 +95,11 @@ private:
     /// expression, then frozen.
     void sampleForCalibration(const pipeline::FrameInput& frame, const pipeline::FaceTrack& face, FitFaceState& s,
                               const Landmarks2d& observed, const FitReport& report) const {
-        if (s.calibrated || s.window.empty() || face.age % kCalibrationStride != 0 ||
+        if (s.calibrated || s.window.empty() || face.age % kCalibrationStride != 0 || face.age == s.sampled_age ||
             report.residual > 0.5 * settings_.max_residual) {
             return;
         }
+        s.sampled_age = face.age;
         CalibrationFrame& sample = s.window[s.samples++];
         sample.camera = frame.camera;
         sample.observed = observed;

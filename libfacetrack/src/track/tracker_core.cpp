@@ -196,12 +196,25 @@ bool TrackerCore::verify(pipeline::FaceTrack& face, Check why) {
 }
 
 void TrackerCore::runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face) {
-    for (std::size_t k = 0; k < stages_.size() && !face.lost; ++k) {
-        if (!available_[k]) continue;
-        const auto start = Clock::now();
-        face.lost = !stages_[k]->run(input, face, face.states[k].get());
-        time(kFirstStage + static_cast<int>(k), start);
+    bool ranAgain = false;
+    for (std::size_t k = 0; k < stages_.size() && !face.lost;) {
+        if (available_[k]) {
+            const auto start = Clock::now();
+            face.lost = !stages_[k]->run(input, face, face.states[k].get());
+            time(kFirstStage + static_cast<int>(k), start);
+        }
+        // A stage doubts a followed face (a fast turn, a fit near its limit): it runs
+        // once more, with the stages before it, from where this pass left the face.
+        // After a turn the landmarks then start from the new pose, not the previous
+        // frame's (docs/fitting.md, "Tracking").
+        if (face.doubtful && !face.fresh && !face.lost && !ranAgain) {
+            ranAgain = true;
+            k = 0;
+            continue;
+        }
+        ++k;
     }
+    face.doubtful = face.doubtful || ranAgain;  // the first pass's doubt stands: verify() checks it
     // A face no stage could place is not followed: found again by the next search.
     if (!face.located) face.lost = true;
 }
