@@ -63,6 +63,7 @@ public:
         : name_(std::move(name)), available_(available), log_(log), index_(index) {}
     std::vector<int> fail_on;  // frame numbers (0-based) on which run() reports a lost face
     std::vector<int> doubt_on; // frame numbers on which a followed face is moved by doubt_jump and doubted
+    std::vector<int> unsettle_on; // frame numbers on which a followed face is marked unsettled
     float doubt_jump = 0.f;
     int frame = -1;            // set by the test before each process()
     Counter seen;              // the face state's counters as of the last run
@@ -86,6 +87,7 @@ public:
         moved.x1 += step;
         face.locate(moved);
         if (doubt) face.doubtful = true;
+        if (!face.fresh && std::find(unsettle_on.begin(), unsettle_on.end(), frame) != unsettle_on.end()) face.unsettled = true;
         return std::find(fail_on.begin(), fail_on.end(), frame) == fail_on.end();
     }
     void resetCalibration(pipeline::StageState* state) const override { ++static_cast<Counter&>(*state).resets; }
@@ -285,6 +287,23 @@ TEST_F(StageRunner, AStageInDoubtRunsAgainWithTheStagesBeforeIt) {
     fakes[1]->doubt_on = {3};
     r = step();
     EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "a", "b"}));
+}
+
+// An unsettled face (a stage's answer far from the previous frame's) runs
+// again the same way, but is not doubted: no detector check.
+TEST_F(StageRunner, AnUnsettledFaceRunsAgainWithoutADetectorCheck) {
+    build({"a"}, 30);
+    fakes[0]->unsettle_on = {1};
+    step();  // 21..61
+    const int detectionsBefore = detections;
+    FrameResult r = step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));
+    EXPECT_EQ(names(r), (std::vector<std::string>{"a"}));
+    EXPECT_EQ(detections, detectionsBefore);
+    EXPECT_TRUE(r.faces.at(0).tracked);
+    EXPECT_EQ(r.faces[0].box.x0, 23.f);
+    step();
+    EXPECT_EQ(log, (std::vector<std::string>{"a"}));
 }
 
 // A face a stage doubts (and ran again, above) is checked with the detector in

@@ -47,8 +47,13 @@ struct FaceTrack {
     bool located = false;   ///< a stage (or the detector) placed the face in this frame
     bool lost = false;      ///< a stage or the verification lost it this frame: dropped
     /// A stage doubts, this frame, that it still follows the face (a jump, a
-    /// poor fit): the Tracker checks it with the detector in this very frame.
+    /// poor fit): the Tracker runs it again (as for `unsettled`), then checks
+    /// it with the detector in this very frame.
     bool doubtful = false;
+    /// A stage's answer moved so far from the previous frame's (a fast turn)
+    /// that the stages before it, started from the previous frame, may have
+    /// stopped short: the Tracker runs them and it once more, from this answer.
+    bool unsettled = false;
     /// The face's box in the last frame, small and standardised (the Tracker's
     /// check that what it follows still looks like what it followed).
     /// Empty when the last frame gave none.

@@ -196,25 +196,27 @@ bool TrackerCore::verify(pipeline::FaceTrack& face, Check why) {
 }
 
 void TrackerCore::runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face) {
-    bool ranAgain = false;
+    bool ranAgain = false, doubted = false;
     for (std::size_t k = 0; k < stages_.size() && !face.lost;) {
         if (available_[k]) {
             const auto start = Clock::now();
             face.lost = !stages_[k]->run(input, face, face.states[k].get());
             time(kFirstStage + static_cast<int>(k), start);
         }
-        // A stage doubts a followed face (a fast turn, a fit near its limit): it runs
-        // once more, with the stages before it, from where this pass left the face.
-        // After a turn the landmarks then start from the new pose, not the previous
-        // frame's (docs/fitting.md, "Tracking").
-        if (face.doubtful && !face.fresh && !face.lost && !ranAgain) {
+        // A stage doubts a followed face or finds it far from the previous frame's
+        // answer (a fast turn): it runs once more, with the stages before it, from
+        // where this pass left the face. After a turn the landmarks then start
+        // from the new pose, not the previous frame's (docs/fitting.md, "Tracking").
+        if ((face.doubtful || face.unsettled) && !face.fresh && !face.lost && !ranAgain) {
             ranAgain = true;
+            doubted = face.doubtful;
+            face.unsettled = false;
             k = 0;
             continue;
         }
         ++k;
     }
-    face.doubtful = face.doubtful || ranAgain;  // the first pass's doubt stands: verify() checks it
+    face.doubtful = face.doubtful || doubted;  // the first pass's doubt stands: verify() checks it
     // A face no stage could place is not followed: found again by the next search.
     if (!face.located) face.lost = true;
 }
@@ -261,7 +263,7 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
     const long frameIndex = frame_index_++;
     std::fill(ms_.begin(), ms_.end(), 0.0);
     std::fill(ran_.begin(), ran_.end(), false);
-    for (auto& t : tracks_) t.located = t.doubtful = false;
+    for (auto& t : tracks_) t.located = t.doubtful = t.unsettled = false;
 
     // Faces first: new ones from the detector or the caller, followed ones verified now and then.
     const int followed = static_cast<int>(tracks_.size());
