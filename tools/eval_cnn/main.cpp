@@ -191,7 +191,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::mt19937 rng(23);
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel, controlToUnperturbed;
-    int crops = 0, lostOnCopy = 0, unfollowed = 0;
+    int crops = 0, lost = 0, unfollowed = 0;
     int comparable = 0;  // starts of crops followed unperturbed: the label-free figure's, lost ones included
     for (const auto& row : table.rows) {
         if (row.split != split) continue;
@@ -228,7 +228,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
             comparable += haveUnperturbed;
             Eigen::Matrix3d r;
             if (!followed(first, moved, c.grey, r)) {
-                ++lostOnCopy;
+                ++lost;
                 continue;
             }
             toLabel.push_back(angleDeg(r * labelRotation.transpose()));
@@ -248,7 +248,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     };
     std::printf("%d %s crops x %d starts: frame 1 the crop turned by yaw +-%.0f deg (uniform) and scaled by +-%.0f %%, frame 2 the crop, "
                 "followed with no detector (%d starts lost, on frame 1 or 2; %d crops not followed unperturbed)\n",
-                crops, split.c_str(), starts, yawDeg, 100.0 * depth, lostOnCopy, unfollowed);
+                crops, split.c_str(), starts, yawDeg, 100.0 * depth, lost, unfollowed);
     line("start (frame 1's pose) to the label", startDeg);
     line("frame 2 to the label (after C)", toLabel);
     line("unperturbed (frame 1 the crop) to the label", unperturbedToLabel);

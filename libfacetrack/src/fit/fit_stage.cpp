@@ -39,7 +39,7 @@ struct FitFaceState final : pipeline::StageState {
     bool fitted = false;
     std::vector<CalibrationFrame> window;  // identity calibration samples, the first `samples` taken
     std::size_t samples = 0;
-    int sampled_age = -1;  // a frame the tracker runs twice (a doubtful one) is sampled once
+    int sampled_age = -1;  // a frame the tracker runs twice (doubtful or unsettled) is sampled once
     bool calibrated = false;
 };
 
