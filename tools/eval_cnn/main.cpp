@@ -192,7 +192,6 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel, controlToUnperturbed;
     int crops = 0, lost = 0, unfollowed = 0;
-    int comparable = 0;  // starts of crops followed unperturbed: the label-free figure's, lost ones included
     for (const auto& row : table.rows) {
         if (row.split != split) continue;
         const Crop c = load(row);
@@ -225,7 +224,6 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
             cv::warpAffine(copy.image, first, scaling, copy.image.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
             startDeg.push_back(rotationErrorDeg(turned, c.label));
             const core::Shape2 moved = (c.annotated * static_cast<float>(k)).colwise() + centre * static_cast<float>(1 - k);
-            comparable += haveUnperturbed;
             Eigen::Matrix3d r;
             if (!followed(first, moved, c.grey, r)) {
                 ++lost;
@@ -253,6 +251,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     line("frame 2 to the label (after C)", toLabel);
     line("unperturbed (frame 1 the crop) to the label", unperturbedToLabel);
     line("frame 2 to the unperturbed (label-free)", toUnperturbed);
+    const int comparable = starts * (crops - unfollowed);  // the label-free figure's starts, lost ones included
     std::printf("  %-54s %5d, within 3 deg %5.1f %%\n", "the same, the starts lost counted as misses", comparable,
                 within3(toUnperturbed) * static_cast<double>(toUnperturbed.size()) / std::max(comparable, 1));
     line("control: frame 1 profiled unturned, to the unperturbed", controlToUnperturbed);
