@@ -485,6 +485,137 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrus
     EXPECT_NEAR(((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f, 0.25f, 1e-3f);
 }
 
+// The brow and eye refiner (landmark_refiner.hpp, one side at a time): a mean shape of one side in a
+// 32 px patch for the fixture net (tests/data/side_fixture.onnx: every offset (+3, 0) patch pixels).
+cnn::CnnModelData withSides(float share) {
+    cnn::CnnModelData m = refinerOnly(0.f);
+    m.side_net = test::fixtureBytes("side_fixture.onnx");
+    m.side_patch_size = 32;
+    for (int i = 0; i < 11; ++i) {  // a brow above an eye, both inside the patch
+        m.side_mean.push_back(i < 5 ? 6.f + 5.f * static_cast<float>(i) : 8.f + 3.f * static_cast<float>(i - 5));
+        m.side_mean.push_back(i < 5 ? 8.f : (i == 5 || i == 8 ? 18.f : (i < 8 ? 16.f : 20.f)));
+    }
+    m.side_share.assign(11, share);
+    return m;
+}
+
+TEST(CnnModelFile, HoldsABrowAndEyeRefinerBesideTheLandmarkRefiner) {
+    const std::string path = test::tempPath("sides.ftm");
+    cnn::writeCnnModel(path, withSides(0.5f));
+    const auto loaded = CnnModel::load(path);
+    EXPECT_EQ(loaded->data().side_net, withSides(0.5f).side_net);
+    EXPECT_EQ(loaded->data().side_mean, withSides(0.5f).side_mean);
+    EXPECT_EQ(loaded->data().side_share, withSides(0.5f).side_share);
+    cnn::writeCnnModel(path, refinerOnly(0.5f));
+    EXPECT_TRUE(CnnModel::load(path)->data().side_net.empty());
+
+    cnn::CnnModelData bad = withSides(0.5f);  // it refines the landmark refiner's answer: needs it
+    bad.refiner_net.clear();
+    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    bad = withSides(1.5f);
+    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    bad = withSides(0.5f);
+    bad.side_mean.pop_back();
+    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    bad = withSides(0.5f);
+    bad.side_mean[0] = 40.f;  // outside the 32 px patch
+    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+}
+
+TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
+    const cnn::SideLayout layout = cnn::makeSideLayout(withSides(1.f));
+    // A frame and a face, and both mirrored: x -> 99 - x, the points renumbered as the mirror maps them.
+    cv::Mat frame(80, 100, CV_8U);  // I(x, y) = x + y: smooth, so that bilinear sampling is exact to a level
+    for (int y = 0; y < frame.rows; ++y)
+        for (int x = 0; x < frame.cols; ++x) frame.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(x + y);
+    cv::Mat flipped;
+    cv::flip(frame, flipped, 1);
+    landmarks::Shape68 face = landmarks::Shape68::Zero();
+    core::Similarity right, left;  // each side's mean shape placed in the frame, turned and scaled differently
+    right.scale = 1.2f, right.angle = 0.1f, right.translation = Eigen::Vector2f(10.f, 15.f);
+    left.scale = 1.4f, left.angle = -0.05f, left.translation = Eigen::Vector2f(8.f, 12.f);
+    const cnn::SideShape rightPoints = right.apply(layout.mean), leftMirrored = left.apply(layout.mean);
+    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {
+        face.col(cnn::kRightSide[i]) = rightPoints.col(static_cast<Eigen::Index>(i));
+        face.col(cnn::kLeftSide[i]) = Eigen::Vector2f(99.f - leftMirrored(0, static_cast<Eigen::Index>(i)), leftMirrored(1, static_cast<Eigen::Index>(i)));
+    }
+    landmarks::Shape68 mirroredFace;
+    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {  // the mirror image's right side is this face's left
+        mirroredFace.col(cnn::kRightSide[i]) = Eigen::Vector2f(99.f - face(0, cnn::kLeftSide[i]), face(1, cnn::kLeftSide[i]));
+        mirroredFace.col(cnn::kLeftSide[i]) = Eigen::Vector2f(99.f - face(0, cnn::kRightSide[i]), face(1, cnn::kRightSide[i]));
+    }
+    EXPECT_LT((cnn::sidePoints(face, true, frame.cols) - leftMirrored).cwiseAbs().maxCoeff(), 1e-4f);
+    EXPECT_LT((cnn::sidePoints(face, false, frame.cols) - rightPoints).cwiseAbs().maxCoeff(), 1e-4f);
+
+    // The right side's patch is the frame at the similarity; the left side's is the mirror image's right side's.
+    cv::Mat patch, mirrorPatch;
+    const cv::Matx23d rightToFrame = cnn::sidePatchToFrame(layout, cnn::sidePoints(face, false, frame.cols), false, frame.cols);
+    cnn::warpSide(layout, frame, rightToFrame, patch);
+    ASSERT_EQ(patch.size(), cv::Size(32, 32));
+    for (const auto& [u, v] : {std::pair{3, 4}, {16, 16}, {28, 9}}) {
+        const Eigen::Vector2f p = right.apply(Eigen::Vector2f(float(u), float(v)));
+        EXPECT_NEAR(patch.at<std::uint8_t>(v, u), p.x() + p.y(), 1.0) << u << "," << v;
+    }
+    const cv::Matx23d leftToFrame = cnn::sidePatchToFrame(layout, cnn::sidePoints(face, true, frame.cols), true, frame.cols);
+    cnn::warpSide(layout, frame, leftToFrame, patch);
+    cnn::warpSide(layout, flipped, cnn::sidePatchToFrame(layout, cnn::sidePoints(mirroredFace, false, flipped.cols), false, flipped.cols),
+                  mirrorPatch);
+    EXPECT_LE(cv::norm(patch, mirrorPatch, cv::NORM_INF), 1.0);
+
+    // Offsets of (+3, 0) patch pixels move the right side's points by B (3, 0) and the left side's by its mirror image.
+    const Eigen::VectorXd offsets = Eigen::Vector2d(3.0, 0.0).replicate(11, 1);
+    landmarks::Shape68 moved = face;
+    cnn::placeSide(layout, rightToFrame, offsets, false, moved);
+    cnn::placeSide(layout, leftToFrame, offsets, true, moved);
+    const Eigen::Vector2f rightShift = right.linear() * Eigen::Vector2f(3.f, 0.f);
+    Eigen::Vector2f leftShift = left.linear() * Eigen::Vector2f(3.f, 0.f);
+    leftShift.x() = -leftShift.x();
+    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {
+        EXPECT_LT((moved.col(cnn::kRightSide[i]) - face.col(cnn::kRightSide[i]) - rightShift).norm(), 1e-3f) << i;
+        EXPECT_LT((moved.col(cnn::kLeftSide[i]) - face.col(cnn::kLeftSide[i]) - leftShift).norm(), 1e-3f) << i;
+    }
+    EXPECT_EQ(moved.col(30), face.col(30));  // the nose is not a side's
+}
+
+TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
+    const std::string path = test::tempPath("refiner_sides.ftm");
+    cnn::writeCnnModel(path, withSides(0.5f));  // the landmark refiner's share is 0: it keeps LBF's points
+    struct Landmarks final : pipeline::Stage {
+        StageInfo info() const override { return {"landmarks", true, "given"}; }
+        bool run(const pipeline::FrameInput&, pipeline::FaceTrack&, pipeline::StageState*) override { return true; }
+    } landmarks;
+    const auto stage = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
+    ASSERT_TRUE(stage->info().available) << stage->info().detail;
+    EXPECT_NE(stage->info().detail.find("brows and eyes"), std::string::npos) << stage->info().detail;
+    const cv::Mat gray(160, 160, CV_8U, cv::Scalar(128));
+    const pipeline::FrameInput frame{ImageView{gray.data, gray.cols, gray.rows, gray.step, PixelFormat::Gray8}, gray,
+                                     fit::cameraFor(gray.cols, gray.rows, 60.0, 0.0), 1.0 / 30.0};
+    // LBF's points: the refiner's mean shape twice as large, in the frame, with each side's brow and eye
+    // the side's mean shape twice as large (the left one mirrored).
+    core::Similarity placed;
+    placed.scale = 2.f;
+    placed.translation = Eigen::Vector2f(40.f, 30.f);
+    landmarks::Shape68 lbf = placed.apply(cnn::makeRefinerLayout(withSides(0.5f)).mean);
+    const cnn::SideLayout layout = cnn::makeSideLayout(withSides(0.5f));
+    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {
+        const Eigen::Vector2f p = 2.f * layout.mean.col(static_cast<Eigen::Index>(i)) + Eigen::Vector2f(20.f, 40.f);
+        lbf.col(cnn::kRightSide[i]) = p;
+        lbf.col(cnn::kLeftSide[i]) = Eigen::Vector2f(159.f - p.x(), p.y());
+    }
+    pipeline::FaceTrack face;
+    face.fresh = true;
+    face.result.landmarks = landmarks::toLandmarks68(lbf);
+    ASSERT_TRUE(stage->run(frame, face, stage->newFaceState().get()));
+    const landmarks::Shape68 got = landmarks::fromLandmarks68(*face.result.landmarks);
+    for (const bool mirrored : {false, true}) {
+        const Eigen::Vector2f shift(mirrored ? -6.f : 6.f, 0.f);  // the net's (+3, 0) patch pixels, twice as large, mirrored
+        for (const int i : mirrored ? cnn::kLeftSide : cnn::kRightSide) {
+            EXPECT_LT((got.col(i) - lbf.col(i) - 0.5f * shift).norm(), 1e-3f) << i;  // half way to the net's points
+        }
+    }
+    for (const int i : {0, 8, 16, 27, 30, 33, 48, 57, 66}) EXPECT_EQ(got.col(i), lbf.col(i)) << i;
+}
+
 TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     FACETRACK_REQUIRE_SHARED();
     Models plain = Models::loadDefault();

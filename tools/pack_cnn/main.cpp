@@ -3,7 +3,12 @@
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
 //                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv] [--min-validation-r R]]
-//                        [--refiner build/refine/net.onnx] --out build/cnn/cascade.ftm [--provenance "..."]
+//                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
+//                        --out build/cnn/cascade.ftm [--provenance "..."]
+//
+// --base: start from that file's nets (the options given replace theirs). --sides: the brow and eye
+// refiner of tools/train_refine/train_region.py (landmark_refiner.hpp, one side at a time), with
+// its NET.side.txt beside it (the patch size, the 22 mean-shape values and the 11 shares).
 //
 // --refiner: the landmark refiner of tools/train_refine/train_refine.py (cnn/landmark_refiner.hpp),
 // with its NET.refiner.txt beside it (the patch size, the 136 mean-shape values, the 68 shares and,
@@ -117,11 +122,12 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from",
-                                                                                                  "--min-validation-r", "--refiner"},
+                                                                                                  "--min-validation-r", "--refiner", "--sides", "--base"},
                            {"--help", "--expressions-only"});
-    if (args.has("--help") || !(args.has("--nets") || args.has("--refiner")) || !args.has("--out")) {
+    if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
         std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
-                  "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]");
+                  "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
+                  "                [--sides S.onnx] [--base FILE.ftm]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = split(args.get("--nets", ""));
@@ -131,8 +137,12 @@ int run(int argc, char** argv) {
 
     const auto face = FaceModel::loadDefault();
     cnn::CnnModelData model;
-    model.provenance = args.get("--provenance", "");
-    model.expressions_only = args.has("--expressions-only");
+    if (args.has("--base")) {
+        model = cnn::readCnnModel(args.get("--base"));
+        if (!nets.empty()) model.stages.clear();
+    }
+    model.provenance = args.get("--provenance", model.provenance);
+    model.expressions_only = model.expressions_only || args.has("--expressions-only");
     for (std::size_t i = 0; i < nets.size(); ++i) {
         const auto names = expressionColumns(nets[i]);
         if (i == 0) model.expressions = names;
@@ -186,6 +196,19 @@ int run(int argc, char** argv) {
         cnn::PatchNet check(model.refiner_net, model.refiner_patch_size, 136, path);
         std::printf("landmark refiner: %s, %d px, %zu bytes, trust ramp %.3f-%.3f\n", path.c_str(), model.refiner_patch_size,
                     model.refiner_net.size(), model.refiner_trust_from, model.refiner_trust_to);
+    }
+    if (args.has("--sides")) {
+        const std::string path = args.get("--sides");
+        model.side_net = readBytes(path);
+        std::stringstream layout(readBytes(path.substr(0, path.size() - std::string(".onnx").size()) + ".side.txt"));
+        layout >> model.side_patch_size;
+        model.side_mean.resize(22);
+        model.side_share.resize(11);
+        for (float& v : model.side_mean) layout >> v;
+        for (float& v : model.side_share) layout >> v;
+        if (!layout) throw Error(path + ": its .side.txt needs the patch size, 22 mean-shape values and 11 shares");
+        cnn::PatchNet check(model.side_net, model.side_patch_size, 22, path);
+        std::printf("brow and eye refiner: %s, %d px, %zu bytes\n", path.c_str(), model.side_patch_size, model.side_net.size());
     }
     cnn::writeCnnModel(args.get("--out"), model);
     std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());

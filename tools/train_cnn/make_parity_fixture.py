@@ -7,7 +7,8 @@ the same layers whose 136 outputs are constant, every point displaced by (+3, 0)
 no pose change and +0.3 on its one expression (cnn_expression_fixture.onnx, for an expressions-only
 cascade); a landmark refiner of train_refine.py's layers on a 32 px patch whose 136 offsets are
 constant, every point (+3, 0) patch pixels from the mean shape (refiner_fixture.onnx, for the
-refine stage's geometry); and the gaze stage's iris-net fixture (iris_net_fixture.onnx, below).
+refine stage's geometry); the same for the brow and eye refiner of train_region.py, 22 offsets, every
+point (+3, 0) (side_fixture.onnx); and the gaze stage's iris-net fixture (iris_net_fixture.onnx, below).
 
   /usr/bin/python3 tools/train_cnn/make_parity_fixture.py tests/data
 """
@@ -74,6 +75,16 @@ with torch.no_grad():
 torch.onnx.export(refiner.eval(), torch.zeros(1, 1, 32, 32), os.path.join(out, "refiner_fixture.onnx"), opset_version=13,
                   input_names=["patch"], output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
 print(f"wrote {out}/refiner_fixture.onnx")
+
+side = Refiner(32, widths=(4, 8), strides=(2, 2), hidden=8)
+side.head[-1] = torch.nn.Linear(8, 22)
+randomise_batchnorm(side)
+with torch.no_grad():
+    side.head[-1].weight.zero_()
+    side.head[-1].bias.copy_(torch.tensor([3.0, 0.0] * 11))
+torch.onnx.export(side.eval(), torch.zeros(1, 1, 32, 32), os.path.join(out, "side_fixture.onnx"), opset_version=13,
+                  input_names=["patch"], output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+print(f"wrote {out}/side_fixture.onnx")
 
 # The gaze stage's iris-net fixture (tests/test_gaze.cpp): 2 x 1 x 28 x 40 -> 2 x 3 x 14 x 20 like
 # tools/train_eyes/train_iris_net.py's nets, but each cell's scores come from its own patch pixel

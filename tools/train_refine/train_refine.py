@@ -82,8 +82,8 @@ def read_dense(teacher, names, indices):
     return out
 
 
-def read_points(path, root_names):
-    """{crop index: (annotation, LBF)} as 68 x 2 arrays; a row's image path ends with its crop's name."""
+def read_points(path, root_names, method=LBF):
+    """{crop index: (annotation, `method`'s points)} as 68 x 2 arrays; a row's image path ends with its crop's name."""
     index = {n: i for i, n in enumerate(root_names)}
     out = {}
     with open(path) as f:
@@ -94,7 +94,7 @@ def read_points(path, root_names):
                 raise ValueError(f"{path}: {row[0]} is none of the crops")
             pts = np.array(row[2:], np.float64).reshape(68, 2)
             out.setdefault(index[name], {})[row[1]] = pts
-    return {k: (v["annotation"], v[LBF]) for k, v in out.items()}
+    return {k: (v["annotation"], v[method]) for k, v in out.items()}
 
 
 def similarity(src, dst):

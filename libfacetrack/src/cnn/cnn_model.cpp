@@ -31,6 +31,17 @@ void validate(const CnnModelData& m, const std::string& what) {
             throw Error(what + ": corrupt: the refiner's trust ramp");
         }
     }
+    if (!m.side_net.empty()) {
+        if (!refiner) throw Error(what + ": corrupt: a brow and eye refiner without the landmark refiner");
+        if (m.side_patch_size < 16 || m.side_patch_size > 256) throw Error(what + ": corrupt: the brow and eye refiner's patch size");
+        if (m.side_mean.size() != 22 || m.side_share.size() != 11) throw Error(what + ": corrupt: the brow and eye refiner's shape");
+        for (const float v : m.side_mean) {
+            if (!(v >= 0.f && v <= m.side_patch_size)) throw Error(what + ": corrupt: the brow and eye mean shape outside its patch");
+        }
+        for (const float v : m.side_share) {
+            if (!(v >= 0.f && v <= 1.f)) throw Error(what + ": corrupt: a brow and eye share outside [0, 1]");
+        }
+    }
     if (!m.neutral.empty() && m.neutral.size() != m.expressions.size()) throw Error(what + ": corrupt: neutral weights");
     if (!m.reported.empty() && m.reported.size() != m.expressions.size()) throw Error(what + ": corrupt: reported expressions");
     for (const float w : m.neutral) {
@@ -76,6 +87,10 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     for (const float v : m.refiner_share) w.put<float>(v);
     w.put<float>(m.refiner_trust_from);
     w.put<float>(m.refiner_trust_to);
+    w.putString(m.side_net);
+    w.put<std::int32_t>(m.side_patch_size);
+    for (const float v : m.side_mean) w.put<float>(v);
+    for (const float v : m.side_share) w.put<float>(v);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -125,6 +140,14 @@ CnnModelData readCnnModel(const std::string& path) {
     if (version >= 5) {
         m.refiner_trust_from = r.get<float>();
         m.refiner_trust_to = r.get<float>();
+    }
+    if (version >= 6) {
+        m.side_net = r.getString();
+        m.side_patch_size = r.get<std::int32_t>();
+        if (!m.side_net.empty()) {
+            for (int i = 0; i < 22; ++i) m.side_mean.push_back(r.get<float>());
+            for (int i = 0; i < 11; ++i) m.side_share.push_back(r.get<float>());
+        }
     }
     r.expectEnd();
     validate(m, what);

@@ -41,10 +41,16 @@ struct CnnModelData {
     /// Where the net takes the whole answer as it disagrees with LBF (landmark_refiner.hpp: D0, D1;
     /// format version 5). D1 <= D0, as in older files: never.
     float refiner_trust_from = 0.f, refiner_trust_to = 0.f;
+    /// The brow and eye refiner (landmark_refiner.hpp, "one side at a time"; format version 6): ONNX
+    /// bytes, or empty for none. It needs the landmark refiner: it runs on that one's answer.
+    std::string side_net;
+    int side_patch_size = 0;
+    std::vector<float> side_mean;   ///< 22: one side's 11 points (kRightSide's order) in patch pixels
+    std::vector<float> side_share;  ///< 11: per point, the net's share of the answer
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 5;
+constexpr std::uint32_t kCnnModelVersion = 6;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

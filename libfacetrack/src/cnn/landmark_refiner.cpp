@@ -55,4 +55,48 @@ landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Sim
     return blendedLandmarks(layout, net, lbf, netTrust(layout, net, lbf));
 }
 
+SideLayout makeSideLayout(const CnnModelData& data) {
+    if (data.side_mean.size() != 22 || data.side_share.size() != 11) {
+        throw Error("brow and eye refiner: needs a mean shape of 11 points and 11 shares");
+    }
+    SideLayout layout;
+    layout.size = data.side_patch_size;
+    layout.mean = Eigen::Map<const SideShape>(data.side_mean.data());
+    layout.share = Eigen::Map<const Eigen::Array<float, 1, 11>>(data.side_share.data());
+    return layout;
+}
+
+SideShape sidePoints(const landmarks::Shape68& shape, bool mirrored, int width) {
+    const auto& index = mirrored ? kLeftSide : kRightSide;
+    SideShape side;
+    for (std::size_t i = 0; i < index.size(); ++i) side.col(static_cast<Eigen::Index>(i)) = shape.col(index[i]);
+    if (mirrored) side.row(0) = (static_cast<float>(width - 1) - side.row(0).array()).matrix();
+    return side;
+}
+
+cv::Matx23d sidePatchToFrame(const SideLayout& layout, const SideShape& side, bool mirrored, int width) {
+    const core::Similarity s = core::alignSimilarity(layout.mean, side);
+    const Eigen::Matrix2f b = s.linear();
+    const cv::Matx23d toFrame(b(0, 0), b(0, 1), s.translation.x(), b(1, 0), b(1, 1), s.translation.y());
+    if (!mirrored) return toFrame;
+    return {-toFrame(0, 0), -toFrame(0, 1), width - 1 - toFrame(0, 2), toFrame(1, 0), toFrame(1, 1), toFrame(1, 2)};
+}
+
+void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& toFrame, cv::Mat& patch) {
+    cv::warpAffine(gray, patch, toFrame, cv::Size(layout.size, layout.size), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+}
+
+void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::VectorXd& e, bool mirrored, landmarks::Shape68& shape) {
+    const auto& index = mirrored ? kLeftSide : kRightSide;
+    const SideShape patch = layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 11>>(e.data()).cast<float>();
+    for (std::size_t i = 0; i < index.size(); ++i) {
+        const auto u = static_cast<double>(patch(0, static_cast<Eigen::Index>(i)));
+        const auto v = static_cast<double>(patch(1, static_cast<Eigen::Index>(i)));
+        const Eigen::Vector2f net(static_cast<float>(toFrame(0, 0) * u + toFrame(0, 1) * v + toFrame(0, 2)),
+                                  static_cast<float>(toFrame(1, 0) * u + toFrame(1, 1) * v + toFrame(1, 2)));
+        const float w = layout.share[static_cast<Eigen::Index>(i)];
+        shape.col(index[i]) = w * net + (1.f - w) * shape.col(index[i]);
+    }
+}
+
 }  // namespace facetrack::cnn

@@ -25,6 +25,18 @@
 // at 45-60 deg of yaw that takes the error from 3.58 to 3.09 % of the box
 // (docs/cnn.md, session 22).
 
+//
+// One side at a time (format version 6): a second net moves the brow and eye
+// points of the answer q, the subject's right side (points 17-21, 36-41) as
+// it is and the left side mirrored into its layout (kLeftSide), so one net
+// reads both. With s the side's 11 points of q in that (mirrored) frame and
+// n_i its mean shape, x -> B x + c is the similarity n -> s, the patch is
+// P(u) = I(M(B u + c)), M the frame's mirror x -> W - 1 - x for the left side
+// (else the identity), and the net's offsets e put the points at
+// M(B (n_i + e_i) + c); each is blended with q by its own share v_i. The
+// brows and eyes are thin: a patch of one side sees them at about twice the
+// face patch's resolution (docs/cnn.md, session 28).
+
 #include "cnn/cnn_model_data.hpp"
 #include "core/shape2d.hpp"
 #include "landmarks/lbf_model.hpp"
@@ -32,6 +44,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <vector>
 
 namespace facetrack::cnn {
@@ -60,6 +73,35 @@ landmarks::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similar
 
 /// q above, with the trust g.
 landmarks::Shape68 blendedLandmarks(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf, float trust);
+
+/// One side's brow and eye points, the subject's right side: its brow, then its eye.
+constexpr std::array<int, 11> kRightSide = {17, 18, 19, 20, 21, 36, 37, 38, 39, 40, 41};
+/// The left side's points that mirror kRightSide's, in the same order.
+constexpr std::array<int, 11> kLeftSide = {26, 25, 24, 23, 22, 45, 44, 43, 42, 47, 46};
+using SideShape = Eigen::Matrix<float, 2, 11>;
+
+struct SideLayout {
+    int size = 0;                      ///< the patch's side, pixels
+    SideShape mean;                    ///< n above
+    Eigen::Array<float, 1, 11> share;  ///< v above
+};
+
+/// The layout a model file stores (cnn_model_data.hpp: patch size, 22 mean values, 11 shares).
+SideLayout makeSideLayout(const CnnModelData& data);
+
+/// One side of `shape` in its patch's frame: `mirrored` (the left side) mirrors x in a frame
+/// `width` pixels wide.
+SideShape sidePoints(const landmarks::Shape68& shape, bool mirrored, int width);
+
+/// The 2 x 3 map from patch pixels to frame pixels, M(B u + c) above.
+cv::Matx23d sidePatchToFrame(const SideLayout& layout, const SideShape& side, bool mirrored, int width);
+
+/// P above, into `patch` (8-bit grey, size x size; reused).
+void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& toFrame, cv::Mat& patch);
+
+/// `shape` with one side's 11 points moved to the net's outputs e (22 values: x_0, y_0, ...),
+/// blended by the shares.
+void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::VectorXd& e, bool mirrored, landmarks::Shape68& shape);
 
 /// q above from the net's outputs d, g from this face alone (a still image).
 landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,

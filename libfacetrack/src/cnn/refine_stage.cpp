@@ -5,6 +5,8 @@
 #include "cnn/patch_net.hpp"
 #include "landmarks/lbf.hpp"
 
+#include <optional>
+
 namespace facetrack::cnn {
 
 namespace {
@@ -22,14 +24,22 @@ public:
     explicit RefineStage(std::shared_ptr<const CnnModel> model)
         : model_(std::move(model)),
           layout_(makeRefinerLayout(model_->data())),
-          net_(model_->data().refiner_net, layout_.size, 2 * landmarks::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {}
+          net_(model_->data().refiner_net, layout_.size, 2 * landmarks::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {
+        if (!model_->data().side_net.empty()) {
+            side_layout_ = makeSideLayout(model_->data());
+            side_net_.emplace(model_->data().side_net, side_layout_.size, 2 * static_cast<int>(kRightSide.size()),
+                              "brow and eye refiner '" + model_->sourcePath() + "'");
+        }
+    }
 
     StageInfo info() const override {
         const std::string trust = layout_.trust_to > layout_.trust_from
                                       ? ", alone where it disagrees with LBF by " + std::to_string(100.f * layout_.trust_to).substr(0, 3) + " %"
                                       : "";
+        const std::string sides =
+            side_net_ ? "; brows and eyes again in a " + std::to_string(side_layout_.size) + " px patch per side" : "";
         return {"refine", true, "CNN landmark refiner, " + std::to_string(layout_.size) + " px patch, mean share " +
-                                    std::to_string(layout_.share.mean()).substr(0, 4) + trust + " (" + model_->sourcePath() + ")"};
+                                    std::to_string(layout_.share.mean()).substr(0, 4) + trust + sides + " (" + model_->sourcePath() + ")"};
     }
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<RefineFaceState>(); }
@@ -50,6 +60,14 @@ public:
             trust = face.fresh ? now : 0.5f * (now + previous);
             refined = blendedLandmarks(layout_, net, lbf, trust);
         }
+        if (side_net_) {
+            for (const bool mirrored : {false, true}) {
+                const cv::Matx23d toFrame = sidePatchToFrame(side_layout_, sidePoints(refined, mirrored, frame.gray.cols), mirrored, frame.gray.cols);
+                warpSide(side_layout_, frame.gray, toFrame, patch_);
+                const Eigen::VectorXd& e = side_net_->predict(patch_);
+                if (e.allFinite()) placeSide(side_layout_, toFrame, e, mirrored, refined);
+            }
+        }
         face.result.landmarks = landmarks::toLandmarks68(refined);
         face.locate(landmarks::boundsOf(refined));
         return true;
@@ -59,6 +77,8 @@ private:
     std::shared_ptr<const CnnModel> model_;
     RefinerLayout layout_;
     PatchNet net_;
+    SideLayout side_layout_;
+    std::optional<PatchNet> side_net_;  ///< the brow and eye refiner, if the file has one
     cv::Mat patch_;
 };
 
