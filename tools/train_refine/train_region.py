@@ -1,0 +1,254 @@
+#!/usr/bin/python3
+"""Experiment (issue 17, "a refiner per region at a higher resolution"): a CNN that refines one side's brow and
+eye points (11 of the 68) from a small patch aligned by them, after the shipped pipeline (LBF and the landmark
+refiner). One net serves both sides: the subject's left side is mirrored into the right side's layout.
+
+    build/tools/facetrack eval-landmarks ../shared/data/faces300w --split S --dlib none --points-out build/region/points_S.csv
+        # S = train, validation, test: the annotation and the shipped pipeline's points
+    /usr/bin/python3 tools/train_refine/train_region.py --out build/region/net [--minutes 40] [--size 64]
+    /usr/bin/python3 tools/train_refine/train_region.py --out build/region/net --evaluate validation|test [--export]
+    build/tools/pack_cnn --base models/cnn_cascade.ftm --sides build/region/net.onnx --out models/cnn_cascade.ftm --provenance "..."
+
+Inputs: build/refine/faces.npz (load_faces.py: every 300-W crop, grey) and the points above. The patch
+(SIZE x SIZE) is the crop warped by the similarity that puts the side's 11 pipeline points best onto their mean
+shape; the net regresses where the annotated points lie in it (offsets from the mean shape, patch pixels).
+Training: the train split's faces, both sides, the alignment perturbed (rotation, scale, shift) and photometric
+changes. The validation split picks the epoch and, for the brows and for the eyes, the net's share of the answer
+(the rest the pipeline's); the test split is read only with --evaluate test. --export writes the best epoch as
+OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads) and OUT.side.txt (patch size, the
+22 mean-shape values, the 11 shares) for pack_cnn --sides.
+"""
+import argparse, math, os, time
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from train_refine import MIRROR, Refiner, read_points, similarity, standardise, warp
+
+torch.set_flush_denormal(True)
+
+PIPELINE = "facetrack LBF + refiner"
+RIGHT = list(range(17, 22)) + list(range(36, 42))  # the subject's right brow and eye (image left)
+LEFT = [MIRROR[i] for i in RIGHT]  # the same points of the other side, in the same order once mirrored
+BROWS, EYES = slice(0, 5), slice(5, 11)  # within a side's 11 points
+
+
+class Sides:
+    """Every face of a split, both sides: image (mirrored for the left side), annotation, pipeline points and the
+    patch -> image similarity from the pipeline's points."""
+
+    def __init__(self, images, points, mean, keys):
+        self.keys = sorted(keys)
+        crops, truth, init, flipped = [], [], [], []
+        for k in self.keys:
+            ann, pipe = points[k]
+            image = torch.from_numpy(images[k]).float()[None] / 255.0
+            width = image.shape[-1]
+            for side, flip in ((RIGHT, False), (LEFT, True)):
+                t, p = ann[side].copy(), pipe[side].copy()
+                if flip:
+                    t[:, 0], p[:, 0] = width - 1 - t[:, 0], width - 1 - p[:, 0]
+                crops.append(image.flip(-1) if flip else image)
+                truth.append(t)
+                init.append(p)
+                flipped.append(flip)
+        self.images = torch.stack(crops)
+        self.truth, self.init, self.flipped = np.stack(truth), np.stack(init), np.array(flipped)
+        self.width = self.images.shape[-1]
+        sims = [similarity(mean, p) for p in self.init]
+        self.A = np.stack([s[0] for s in sims])
+        self.t = np.stack([s[1] for s in sims])
+
+
+def side_mean(shapes, size):
+    """Procrustes mean of the sides' annotated points, centred in the patch, 0.7 size wide."""
+    ref = shapes[0] - shapes[0].mean(0)
+    for _ in range(5):
+        ref = np.mean([s @ A.T + t for s in shapes for A, t in [similarity(s, ref)]], 0)
+        ref -= ref.mean(0)
+    ref *= 0.7 * size / np.ptp(ref[:, 0])
+    return ref + (size - 1) / 2.0
+
+
+def batch(sides, idx, mean, size, rng, augment):
+    A, t = sides.A[idx].copy(), sides.t[idx].copy()
+    n = len(idx)
+    if augment:
+        centre = np.full(2, (size - 1) / 2.0)
+        angle = np.deg2rad(rng.normal(0, 4, n))
+        scale = np.exp(rng.normal(0, 0.05, n))
+        shift = rng.normal(0, 0.03 * size, (n, 2))
+        for i in range(n):
+            c, s = math.cos(angle[i]) * scale[i], math.sin(angle[i]) * scale[i]
+            P = np.array([[c, -s], [s, c]])
+            t[i] = A[i] @ (centre - P @ centre + shift[i]) + t[i]
+            A[i] = A[i] @ P
+    x = warp(sides.images[idx], torch.from_numpy(A).float(), torch.from_numpy(t).float(), size)
+    truth = np.einsum("bij,bnj->bni", np.linalg.inv(A), sides.truth[idx] - t[:, None, :])
+    if augment:
+        gain = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
+        gamma = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
+        x = x.clamp(1e-4, 1).pow(gamma) * gain + torch.from_numpy(rng.normal(0, 0.1, (n, 1, 1, 1))).float()
+        blur = torch.from_numpy(rng.random(n) < 0.25)
+        if blur.any():
+            x[blur] = F.avg_pool2d(x[blur], 3, stride=1, padding=1, count_include_pad=False)
+        x = x + torch.randn_like(x) * torch.from_numpy(rng.uniform(0, 0.03, (n, 1, 1, 1))).float()
+    target = torch.from_numpy((truth - mean[None]).reshape(n, -1)).float()
+    return standardise(x), target, A, t
+
+
+def predict(net, sides, mean, size):
+    """The refined side points in (possibly mirrored) image pixels, N x 11 x 2."""
+    net.eval()
+    out = []
+    with torch.no_grad():
+        for start in range(0, len(sides.truth), 256):
+            idx = np.arange(start, min(start + 256, len(sides.truth)))
+            x, _, A, t = batch(sides, idx, mean, size, None, augment=False)
+            u = net(x).numpy().reshape(-1, len(RIGHT), 2) + mean[None]
+            out.append(np.einsum("bij,bnj->bni", A, u) + t[:, None, :])
+    return np.concatenate(out)
+
+
+def errors(points, sides):
+    """Per side and point, the error over the face's outer-eye-corner distance (the 300-W NME's terms)."""
+    truth = sides.truth.reshape(-1, 2, len(RIGHT), 2)  # face, side, point
+    # the outer eye corners are points 36 (right side, index 5) and 45 (left side, index 5 too once mirrored)
+    right, left = truth[:, 0, 5], truth[:, 1, 5].copy()
+    left[:, 0] = sides.width - 1 - left[:, 0]
+    iod = np.repeat(np.linalg.norm(right - left, axis=1), 2)
+    return np.linalg.norm(points - sides.truth, axis=2) / iod[:, None]
+
+
+def shares(net_points, sides):
+    """The net's share, for the brows and for the eyes, with the lowest mean error (grid 0, 0.05, ..., 1)."""
+    grid = np.linspace(0, 1, 21)
+    best = {}
+    for name, part in (("brows", BROWS), ("eyes", EYES)):
+        scores = [errors(w * net_points + (1 - w) * sides.init, sides)[:, part].mean() for w in grid]
+        best[name] = grid[int(np.argmin(scores))]
+    return best
+
+
+def blended(net_points, sides, share):
+    w = np.zeros(len(RIGHT))
+    w[BROWS], w[EYES] = share["brows"], share["eyes"]
+    return w[None, :, None] * net_points + (1 - w[None, :, None]) * sides.init
+
+
+def summary(name, points, sides):
+    e = errors(points, sides)
+    return f"{name}: brows {100 * e[:, BROWS].mean():.2f} %, eyes {100 * e[:, EYES].mean():.2f} %"
+
+
+def whole_face(points_csv, names, sides, refined):
+    """The 68-point NME of the pipeline, and with its brow and eye points replaced by `refined`."""
+    points = read_points(points_csv, names, PIPELINE)
+    truth = np.stack([points[k][0] for k in sides.keys])
+    pipe = np.stack([points[k][1] for k in sides.keys])
+    new = pipe.copy()
+    r = refined.reshape(-1, 2, len(RIGHT), 2).copy()
+    r[:, 1, :, 0] = sides.width - 1 - r[:, 1, :, 0]
+    new[:, RIGHT], new[:, LEFT] = r[:, 0], r[:, 1]
+    iod = np.linalg.norm(truth[:, 36] - truth[:, 45], axis=1)
+    nme = lambda p: (np.linalg.norm(p - truth, axis=2).mean(1) / iod).mean()
+    return nme(pipe), nme(new)
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--faces", default="build/refine/faces.npz")
+    p.add_argument("--data", default="build/region")
+    p.add_argument("--out", default="build/region/net")
+    p.add_argument("--size", type=int, default=64)
+    p.add_argument("--minutes", type=float, default=40)
+    p.add_argument("--batch", type=int, default=64)
+    p.add_argument("--widths", default="16,32,64,64,128")
+    p.add_argument("--strides", default="2,2,2,1,2")
+    p.add_argument("--hidden", type=int, default=256)
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--evaluate", choices=["validation", "test"])
+    p.add_argument("--export", action="store_true")
+    a = p.parse_args()
+    torch.set_num_threads(a.threads)
+    data = np.load(a.faces)
+    names = list(data["names"])
+    csv = lambda s: os.path.join(a.data, f"points_{s}.csv")
+    points = {s: read_points(csv(s), names, PIPELINE) for s in ("train", "validation")}
+    shapes = []
+    for ann, _ in points["train"].values():
+        left = ann[LEFT].copy()
+        left[:, 0] = 255 - left[:, 0]
+        shapes += [ann[RIGHT], left]
+    mean = side_mean(shapes, a.size)
+    train = Sides(data["images"], points["train"], mean, points["train"].keys())
+    val = Sides(data["images"], points["validation"], mean, points["validation"].keys())
+    net = Refiner(a.size, widths=tuple(int(v) for v in a.widths.split(",")), strides=tuple(int(v) for v in a.strides.split(",")),
+                  hidden=a.hidden)
+    net.head[-1] = torch.nn.Linear(a.hidden, 2 * len(RIGHT))
+    print(f"{len(train.truth)} training sides, {len(val.truth)} validation; {sum(p.numel() for p in net.parameters())} parameters",
+          flush=True)
+    if a.evaluate:
+        saved = torch.load(a.out + ".best.pt")
+        net.load_state_dict(saved["net"])
+        share = shares(predict(net, val, mean, a.size), val)
+        sides = val
+        if a.evaluate == "test":
+            test = read_points(csv("test"), names, PIPELINE)
+            sides = Sides(data["images"], test, mean, test.keys())
+        refined = predict(net, sides, mean, a.size)
+        print(f"net's share (validation): brows {share['brows']:.2f}, eyes {share['eyes']:.2f}")
+        print(summary(f"{a.evaluate} pipeline", sides.init, sides))
+        print(summary(f"{a.evaluate} net", refined, sides))
+        print(summary(f"{a.evaluate} blend", blended(refined, sides, share), sides))
+        before, after = whole_face(csv(a.evaluate), names, sides, blended(refined, sides, share))
+        print(f"{a.evaluate} 68-point NME: pipeline {100 * before:.2f} %, with the blend {100 * after:.2f} %")
+        if a.export:
+            net.eval()
+            torch.onnx.export(net, torch.zeros(1, 1, a.size, a.size), a.out + ".onnx", opset_version=13, input_names=["patch"],
+                              output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+            w = np.zeros(len(RIGHT))
+            w[BROWS], w[EYES] = share["brows"], share["eyes"]
+            with open(a.out + ".side.txt", "w") as f:
+                f.write(f"{a.size}\n" + " ".join(f"{v:.6f}" for v in mean.reshape(-1)) + "\n" + " ".join(f"{v:.2f}" for v in w) + "\n")
+            print(f"wrote {a.out}.onnx and {a.out}.side.txt")
+        return
+    print(summary("validation pipeline", val.init, val), flush=True)
+    opt = torch.optim.AdamW(net.parameters(), lr=1e-3, weight_decay=1e-5)
+    rng = np.random.default_rng(0)
+    budget, began, seconds, epoch, best = a.minutes * 60, time.time(), 0.0, 0, None
+    log = open(a.out + ".log", "a")
+    while time.time() - began < budget:
+        start_time = time.time()
+        net.train()
+        lr = 1e-3 * 0.5 * (1 + math.cos(math.pi * min(1.0, seconds / budget)))
+        for g in opt.param_groups:
+            g["lr"] = lr
+        order = rng.permutation(len(train.truth))
+        losses = []
+        for start in range(0, len(order) - a.batch + 1, a.batch):
+            x, target, _, _ = batch(train, order[start:start + a.batch], mean, a.size, rng, augment=True)
+            loss = F.smooth_l1_loss(net(x), target, beta=0.5)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            losses.append(loss.item())
+        epoch += 1
+        seconds += time.time() - start_time
+        refined = predict(net, val, mean, a.size)
+        share = shares(refined, val)
+        score = errors(blended(refined, val, share), val).mean()
+        if best is None or score < best:
+            best = score
+            torch.save({"net": net.state_dict(), "mean": mean}, a.out + ".best.pt")
+        line = (f"epoch {epoch} lr {lr:.2e} loss {np.mean(losses):.4f} {summary('net', refined, val)}; blend "
+                f"(brows {share['brows']:.2f}, eyes {share['eyes']:.2f}) {100 * score:.3f} %, best {100 * best:.3f} % "
+                f"({time.time() - start_time:.0f} s)")
+        print(line, flush=True)
+        log.write(line + "\n")
+        log.flush()
+
+
+if __name__ == "__main__":
+    main()
