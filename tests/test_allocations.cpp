@@ -88,7 +88,8 @@ TEST(Allocations, NonePerTrackedFrameAfterWarmUp) {
 }
 
 // With the shipped CNN file, a tracked frame allocates exactly what one run of the refiner does
-// (OpenCV's dnn and warpAffine), or two where the stage runs its second round, and nothing else
+// (OpenCV's dnn and warpAffine), or two where the stage runs its second round, and the brow and eye
+// refiner's two runs when the file has it, and nothing else
 // (docs/architecture.md: own kernels would remove it).
 // On one OpenCV thread: with a pool, what a run allocates depends on which worker joined it and
 // whether that worker had run the net before (CI saw 130 against 127 in one process).
@@ -116,15 +117,33 @@ TEST(Allocations, WithTheRefinerOnlyItsNetAllocates) {
         EXPECT_TRUE(refined.allFinite());
         perRun = allocations.load() - before;
     }
+    // And, with the brow and eye refiner, its two runs (one per side) after the refiner's.
+    long sides = 0;
+    if (!d.side_net.empty()) {
+        const cnn::SideLayout sideLayout = cnn::makeSideLayout(d);
+        cnn::PatchNet sideNet(d.side_net, sideLayout.size, 22, "brow and eye refiner");
+        for (int run = 0; run < 2; ++run) {
+            const long before = allocations.load();
+            landmarks::Shape68 refined = points;
+            for (const bool mirrored : {false, true}) {
+                const cv::Matx23d toFrame = cnn::sidePatchToFrame(sideLayout, cnn::sidePoints(refined, mirrored, gray.cols), mirrored, gray.cols);
+                cnn::warpSide(sideLayout, gray, toFrame, patch);
+                cnn::placeSide(sideLayout, toFrame, sideNet.predict(patch), mirrored, refined);
+            }
+            EXPECT_TRUE(refined.allFinite());
+            sides = allocations.load() - before;
+        }
+    }
     long verifyFrames = 0, allocationsElsewhere = 0;
     const std::vector<long> tracked = trackedFrameAllocations(models, verifyFrames, allocationsElsewhere);
     int twice = 0;
     for (std::size_t i = 0; i < tracked.size(); ++i) {
-        EXPECT_TRUE(tracked[i] == perRun || tracked[i] == 2 * perRun) << "tracked frame " << i << ": " << tracked[i];
-        twice += tracked[i] == 2 * perRun;
+        EXPECT_TRUE(tracked[i] == perRun + sides || tracked[i] == 2 * perRun + sides) << "tracked frame " << i << ": " << tracked[i];
+        twice += tracked[i] == 2 * perRun + sides;
     }
-    std::printf("%zu tracked frames, each %ld allocations: one run of the refiner (cv::dnn, cv::warpAffine); %d with a second\n",
-                tracked.size(), perRun, twice);
+    std::printf("%zu tracked frames, each %ld allocations: one run of the refiner (cv::dnn, cv::warpAffine), %ld of the brow and "
+                "eye refiner's two; %d with a second run of the refiner\n",
+                tracked.size(), perRun + sides, sides, twice);
     EXPECT_GT(tracked.size(), 120u);
     cv::setNumThreads(threads);
 }

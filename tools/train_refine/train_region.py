@@ -6,15 +6,17 @@ refiner). One net serves both sides: the subject's left side is mirrored into th
     build/tools/facetrack eval-landmarks ../shared/data/faces300w --split S --dlib none --points-out build/region/points_S.csv
         # S = train, validation, test: the annotation and the shipped pipeline's points
     /usr/bin/python3 tools/train_refine/train_region.py --out build/region/net [--minutes 40] [--size 64]
-    /usr/bin/python3 tools/train_refine/train_region.py --out build/region/net --evaluate validation|test [--export]
+    /usr/bin/python3 tools/train_refine/train_region.py --out build/region/net --evaluate validation|test [--export] [--brows-only]
     build/tools/pack_cnn --base models/cnn_cascade.ftm --sides build/region/net.onnx --out models/cnn_cascade.ftm --provenance "..."
 
 Inputs: build/refine/faces.npz (load_faces.py: every 300-W crop, grey) and the points above. The patch
 (SIZE x SIZE) is the crop warped by the similarity that puts the side's 11 pipeline points best onto their mean
 shape; the net regresses where the annotated points lie in it (offsets from the mean shape, patch pixels).
 Training: the train split's faces, both sides, the alignment perturbed (rotation, scale, shift) and photometric
-changes. The validation split picks the epoch and, for the brows and for the eyes, the net's share of the answer
-(the rest the pipeline's); the test split is read only with --evaluate test. --export writes the best epoch as
+changes; with --profiled also their copies turned to large yaw (face profiling, docs/cnn.md). The validation split
+(and its turned copies) picks the epoch and, for the brows and for the eyes, the net's share of the answer (the rest
+the pipeline's), on the sum of each set's error relative to the pipeline's; the test split is read only with
+--evaluate test. --export writes the best epoch as
 OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads) and OUT.side.txt (patch size, the
 22 mean-shape values, the 11 shares) for pack_cnn --sides.
 """
@@ -38,11 +40,14 @@ class Sides:
     """Every face of a split, both sides: image (mirrored for the left side), annotation, pipeline points and the
     patch -> image similarity from the pipeline's points."""
 
-    def __init__(self, images, points, mean, keys):
+    def __init__(self, images, points, mean, keys, by_box=False):
         self.keys = sorted(keys)
-        crops, truth, init, flipped = [], [], [], []
+        crops, truth, init, flipped, norm = [], [], [], [], []
         for k in self.keys:
             ann, pipe = points[k]
+            # the error's unit: the outer-eye-corner distance (300-W's NME), or for turned copies, whose eye
+            # corners close up, sqrt(w h) of the annotation's box (the large-pose NME)
+            unit = math.sqrt(np.ptp(ann[:, 0]) * np.ptp(ann[:, 1])) if by_box else np.linalg.norm(ann[36] - ann[45])
             image = torch.from_numpy(images[k]).float()[None] / 255.0
             width = image.shape[-1]
             for side, flip in ((RIGHT, False), (LEFT, True)):
@@ -53,12 +58,20 @@ class Sides:
                 truth.append(t)
                 init.append(p)
                 flipped.append(flip)
+                norm.append(unit)
         self.images = torch.stack(crops)
-        self.truth, self.init, self.flipped = np.stack(truth), np.stack(init), np.array(flipped)
+        self.truth, self.init, self.flipped, self.norm = np.stack(truth), np.stack(init), np.array(flipped), np.array(norm)
         self.width = self.images.shape[-1]
         sims = [similarity(mean, p) for p in self.init]
         self.A = np.stack([s[0] for s in sims])
         self.t = np.stack([s[1] for s in sims])
+
+    def join(self, other):
+        """These sides and the other's, as one set."""
+        self.images = torch.cat([self.images, other.images])
+        for name in ("truth", "init", "flipped", "norm", "A", "t"):
+            setattr(self, name, np.concatenate([getattr(self, name), getattr(other, name)]))
+        return self
 
 
 def side_mean(shapes, size):
@@ -112,21 +125,23 @@ def predict(net, sides, mean, size):
 
 
 def errors(points, sides):
-    """Per side and point, the error over the face's outer-eye-corner distance (the 300-W NME's terms)."""
-    truth = sides.truth.reshape(-1, 2, len(RIGHT), 2)  # face, side, point
-    # the outer eye corners are points 36 (right side, index 5) and 45 (left side, index 5 too once mirrored)
-    right, left = truth[:, 0, 5], truth[:, 1, 5].copy()
-    left[:, 0] = sides.width - 1 - left[:, 0]
-    iod = np.repeat(np.linalg.norm(right - left, axis=1), 2)
-    return np.linalg.norm(points - sides.truth, axis=2) / iod[:, None]
+    """Per side and point, the error over the face's unit (Sides: the outer-eye-corner distance, or sqrt(w h))."""
+    return np.linalg.norm(points - sides.truth, axis=2) / sides.norm[:, None]
 
 
-def shares(net_points, sides):
-    """The net's share, for the brows and for the eyes, with the lowest mean error (grid 0, 0.05, ..., 1)."""
+def score(sets, refined, share):
+    """The validation score: per set (300-W validation, and the turned copies), the blend's mean error over the
+    pipeline's, summed (1 per set: no better)."""
+    return sum(errors(blended(r, v, share), v).mean() / errors(v.init, v).mean() for v, r in zip(sets, refined))
+
+
+def shares(sets, refined):
+    """The net's share, for the brows and for the eyes, with the lowest score (grid 0, 0.05, ..., 1)."""
     grid = np.linspace(0, 1, 21)
     best = {}
     for name, part in (("brows", BROWS), ("eyes", EYES)):
-        scores = [errors(w * net_points + (1 - w) * sides.init, sides)[:, part].mean() for w in grid]
+        scores = [sum(errors(w * r + (1 - w) * v.init, v)[:, part].mean() / errors(v.init, v)[:, part].mean()
+                      for v, r in zip(sets, refined)) for w in grid]
         best[name] = grid[int(np.argmin(scores))]
     return best
 
@@ -168,8 +183,12 @@ def main():
     p.add_argument("--strides", default="2,2,2,1,2")
     p.add_argument("--hidden", type=int, default=256)
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--profiled", help="the large-pose copies' folder (make_profiled_faces; DIR/S/faces.npz by load_faces.py), with "
+                                      "DATA/profiled_points_S.csv (eval-landmarks DIR/S --points-out): joined to training and validation")
     p.add_argument("--evaluate", choices=["validation", "test"])
     p.add_argument("--export", action="store_true")
+    p.add_argument("--brows-only", action="store_true",
+                   help="the eyes' share 0: their points stay the pipeline's (the gaze stage's synthetic renders read worse with the net's)")
     a = p.parse_args()
     torch.set_num_threads(a.threads)
     data = np.load(a.faces)
@@ -184,6 +203,16 @@ def main():
     mean = side_mean(shapes, a.size)
     train = Sides(data["images"], points["train"], mean, points["train"].keys())
     val = Sides(data["images"], points["validation"], mean, points["validation"].keys())
+    sets = [val]
+    if a.profiled:
+        for split in ("train", "validation"):
+            copies = np.load(os.path.join(a.profiled, split, "faces.npz"))
+            turned_points = read_points(os.path.join(a.data, f"profiled_points_{split}.csv"), list(copies["names"]), PIPELINE)
+            turned = Sides(copies["images"], turned_points, mean, turned_points.keys(), by_box=True)
+            if split == "train":
+                train.join(turned)
+            else:
+                sets.append(turned)
     net = Refiner(a.size, widths=tuple(int(v) for v in a.widths.split(",")), strides=tuple(int(v) for v in a.strides.split(",")),
                   hidden=a.hidden)
     net.head[-1] = torch.nn.Linear(a.hidden, 2 * len(RIGHT))
@@ -192,7 +221,9 @@ def main():
     if a.evaluate:
         saved = torch.load(a.out + ".best.pt")
         net.load_state_dict(saved["net"])
-        share = shares(predict(net, val, mean, a.size), val)
+        share = shares(sets, [predict(net, v, mean, a.size) for v in sets])
+        if a.brows_only:
+            share["eyes"] = 0.0
         sides = val
         if a.evaluate == "test":
             test = read_points(csv("test"), names, PIPELINE)
@@ -204,6 +235,11 @@ def main():
         print(summary(f"{a.evaluate} blend", blended(refined, sides, share), sides))
         before, after = whole_face(csv(a.evaluate), names, sides, blended(refined, sides, share))
         print(f"{a.evaluate} 68-point NME: pipeline {100 * before:.2f} %, with the blend {100 * after:.2f} %")
+        if a.evaluate == "validation" and len(sets) > 1:
+            turned = sets[1]
+            refined = predict(net, turned, mean, a.size)
+            for name, pts in (("pipeline", turned.init), ("net", refined), ("blend", blended(refined, turned, share))):
+                print(summary(f"turned validation copies {name} (over sqrt(box))", pts, turned))
         if a.export:
             net.eval()
             torch.onnx.export(net, torch.zeros(1, 1, a.size, a.size), a.out + ".onnx", opset_version=13, input_names=["patch"],
@@ -214,7 +250,8 @@ def main():
                 f.write(f"{a.size}\n" + " ".join(f"{v:.6f}" for v in mean.reshape(-1)) + "\n" + " ".join(f"{v:.2f}" for v in w) + "\n")
             print(f"wrote {a.out}.onnx and {a.out}.side.txt")
         return
-    print(summary("validation pipeline", val.init, val), flush=True)
+    for v in sets:
+        print(summary("validation pipeline" if v is val else "turned validation copies' pipeline (over sqrt(box))", v.init, v), flush=True)
     opt = torch.optim.AdamW(net.parameters(), lr=1e-3, weight_decay=1e-5)
     rng = np.random.default_rng(0)
     budget, began, seconds, epoch, best = a.minutes * 60, time.time(), 0.0, 0, None
@@ -236,15 +273,16 @@ def main():
             losses.append(loss.item())
         epoch += 1
         seconds += time.time() - start_time
-        refined = predict(net, val, mean, a.size)
-        share = shares(refined, val)
-        score = errors(blended(refined, val, share), val).mean()
-        if best is None or score < best:
-            best = score
+        refined = [predict(net, v, mean, a.size) for v in sets]
+        share = shares(sets, refined)
+        now = score(sets, refined, share)
+        if best is None or now < best:
+            best = now
             torch.save({"net": net.state_dict(), "mean": mean}, a.out + ".best.pt")
-        line = (f"epoch {epoch} lr {lr:.2e} loss {np.mean(losses):.4f} {summary('net', refined, val)}; blend "
-                f"(brows {share['brows']:.2f}, eyes {share['eyes']:.2f}) {100 * score:.3f} %, best {100 * best:.3f} % "
-                f"({time.time() - start_time:.0f} s)")
+        turned = f"; turned copies' blend {summary('', blended(refined[1], sets[1], share), sets[1])}" if len(sets) > 1 else ""
+        line = (f"epoch {epoch} lr {lr:.2e} loss {np.mean(losses):.4f} {summary('net', refined[0], val)}; blend "
+                f"(brows {share['brows']:.2f}, eyes {share['eyes']:.2f}) {summary('', blended(refined[0], val, share), val)}{turned}; "
+                f"score {now:.4f}, best {best:.4f} ({time.time() - start_time:.0f} s)")
         print(line, flush=True)
         log.write(line + "\n")
         log.flush()

@@ -63,8 +63,8 @@ public:
         if (side_net_) {
             for (const bool mirrored : {false, true}) {
                 const cv::Matx23d toFrame = sidePatchToFrame(side_layout_, sidePoints(refined, mirrored, frame.gray.cols), mirrored, frame.gray.cols);
-                warpSide(side_layout_, frame.gray, toFrame, patch_);
-                const Eigen::VectorXd& e = side_net_->predict(patch_);
+                warpSide(side_layout_, frame.gray, toFrame, side_patch_);
+                const Eigen::VectorXd& e = side_net_->predict(side_patch_);
                 if (e.allFinite()) placeSide(side_layout_, toFrame, e, mirrored, refined);
             }
         }
@@ -79,7 +79,7 @@ private:
     PatchNet net_;
     SideLayout side_layout_;
     std::optional<PatchNet> side_net_;  ///< the brow and eye refiner, if the file has one
-    cv::Mat patch_;
+    cv::Mat patch_, side_patch_;  // each its own size: reused, never reallocated
 };
 
 }  // namespace
