@@ -614,6 +614,13 @@ TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
         }
     }
     for (const int i : {0, 8, 16, 27, 30, 33, 48, 57, 66}) EXPECT_EQ(got.col(i), lbf.col(i)) << i;
+
+    // A degenerate face, every point in one place: the landmarks stay finite.
+    pipeline::FaceTrack collapsed;
+    collapsed.fresh = true;
+    collapsed.result.landmarks = landmarks::toLandmarks68(landmarks::Shape68::Constant(80.f));
+    ASSERT_TRUE(stage->run(frame, collapsed, stage->newFaceState().get()));
+    EXPECT_TRUE(landmarks::fromLandmarks68(*collapsed.result.landmarks).allFinite());
 }
 
 TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {

@@ -60,12 +60,13 @@ public:
             trust = face.fresh ? now : 0.5f * (now + previous);
             refined = blendedLandmarks(layout_, net, lbf, trust);
         }
-        if (side_net_) {
+        if (side_net_ && refined.allFinite()) {
             for (const bool mirrored : {false, true}) {
                 const cv::Matx23d toFrame = sidePatchToFrame(side_layout_, sidePoints(refined, mirrored, frame.gray.cols), mirrored, frame.gray.cols);
                 warpSide(side_layout_, frame.gray, toFrame, side_patch_);
-                const Eigen::VectorXd& e = side_net_->predict(side_patch_);
-                if (e.allFinite()) placeSide(side_layout_, toFrame, e, mirrored, refined);
+                landmarks::Shape68 placed = refined;
+                placeSide(side_layout_, toFrame, side_net_->predict(side_patch_), mirrored, placed);
+                if (placed.allFinite()) refined = placed;  // a degenerate side keeps the refiner's points
             }
         }
         face.result.landmarks = landmarks::toLandmarks68(refined);
