@@ -222,6 +222,19 @@ class Faces:
         return self
 
 
+def photometric(x, rng):
+    """Training patches (B x 1 x H x W in [0, 1]) with a random gain, gamma and bias, a 3x3 blur on a quarter of
+    them, and pixel noise."""
+    n = x.shape[0]
+    gain = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
+    gamma = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
+    x = x.clamp(1e-4, 1).pow(gamma) * gain + torch.from_numpy(rng.normal(0, 0.1, (n, 1, 1, 1))).float()
+    blur = torch.from_numpy(rng.random(n) < 0.25)
+    if blur.any():
+        x[blur] = F.avg_pool2d(x[blur], 3, stride=1, padding=1, count_include_pad=False)
+    return x + torch.randn_like(x) * torch.from_numpy(rng.uniform(0, 0.03, (n, 1, 1, 1))).float()
+
+
 def batch(faces, idx, mean, size, rng, augment, cutout=0.0):
     A = faces.A[idx].copy()
     t = faces.t[idx].copy()
@@ -251,13 +264,7 @@ def batch(faces, idx, mean, size, rng, augment, cutout=0.0):
             x[i] = x[i].flip(-1)
             truth[i] = truth[i][MIRROR]
             truth[i][:, 0] = size - 1 - truth[i][:, 0]
-        gain = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
-        gamma = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
-        x = x.clamp(1e-4, 1).pow(gamma) * gain + torch.from_numpy(rng.normal(0, 0.1, (n, 1, 1, 1))).float()
-        blur = torch.from_numpy(rng.random(n) < 0.25)
-        if blur.any():
-            x[blur] = F.avg_pool2d(x[blur], 3, stride=1, padding=1, count_include_pad=False)
-        x = x + torch.randn_like(x) * torch.from_numpy(rng.uniform(0, 0.03, (n, 1, 1, 1))).float()
+        x = photometric(x, rng)
         for i in np.nonzero(rng.random(n) < cutout)[0]:  # an occluder: a grey rectangle up to a third of the patch
             w, h = rng.integers(size // 8, size // 3, 2)
             x0, y0 = rng.integers(0, size - w), rng.integers(0, size - h)

@@ -26,7 +26,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from train_refine import MIRROR, Refiner, read_points, similarity, standardise, warp
+from train_refine import MIRROR, Refiner, photometric, read_points, similarity, standardise, warp
 
 torch.set_flush_denormal(True)
 
@@ -100,13 +100,7 @@ def batch(sides, idx, mean, size, rng, augment):
     x = warp(sides.images[idx], torch.from_numpy(A).float(), torch.from_numpy(t).float(), size)
     truth = np.einsum("bij,bnj->bni", np.linalg.inv(A), sides.truth[idx] - t[:, None, :])
     if augment:
-        gain = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
-        gamma = torch.from_numpy(np.exp(rng.normal(0, 0.25, (n, 1, 1, 1)))).float()
-        x = x.clamp(1e-4, 1).pow(gamma) * gain + torch.from_numpy(rng.normal(0, 0.1, (n, 1, 1, 1))).float()
-        blur = torch.from_numpy(rng.random(n) < 0.25)
-        if blur.any():
-            x[blur] = F.avg_pool2d(x[blur], 3, stride=1, padding=1, count_include_pad=False)
-        x = x + torch.randn_like(x) * torch.from_numpy(rng.uniform(0, 0.03, (n, 1, 1, 1))).float()
+        x = photometric(x, rng)
     target = torch.from_numpy((truth - mean[None]).reshape(n, -1)).float()
     return standardise(x), target, A, t
 
