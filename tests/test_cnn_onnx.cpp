@@ -435,6 +435,12 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
     EXPECT_EQ(cnn::netTrust(layout, lbf.colwise() + 100.f * shift, lbf), 0.f);
 }
 
+/// Stands in for the landmarks stage the refine stage needs: the test gives the face's landmarks.
+struct GivenLandmarks final : pipeline::Stage {
+    StageInfo info() const override { return {"landmarks", true, "given"}; }
+    bool run(const pipeline::FrameInput&, pipeline::FaceTrack&, pipeline::StageState*) override { return true; }
+};
+
 TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrustsTheNet) {
     // The fixture moves every point by (+3, 0) patch pixels, so the net and LBF disagree alike on
     // every frame; a ramp below that disagreement trusts the net alone on any one frame (g = 1).
@@ -442,10 +448,7 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrus
     m.refiner_trust_from = 0.f, m.refiner_trust_to = 1e-4f;
     const std::string path = test::tempPath("refiner_trust.ftm");
     cnn::writeCnnModel(path, m);
-    struct Landmarks final : pipeline::Stage {  // stands in for the landmarks stage the refiner needs
-        StageInfo info() const override { return {"landmarks", true, "given"}; }
-        bool run(const pipeline::FrameInput&, pipeline::FaceTrack&, pipeline::StageState*) override { return true; }
-    } landmarks;
+    GivenLandmarks landmarks;
     const auto stage = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
     ASSERT_TRUE(stage->info().available) << stage->info().detail;
     const auto state = stage->newFaceState();
@@ -580,10 +583,7 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
 TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
     const std::string path = test::tempPath("refiner_sides.ftm");
     cnn::writeCnnModel(path, withSides(0.5f));  // the landmark refiner's share is 0: it keeps LBF's points
-    struct Landmarks final : pipeline::Stage {
-        StageInfo info() const override { return {"landmarks", true, "given"}; }
-        bool run(const pipeline::FrameInput&, pipeline::FaceTrack&, pipeline::StageState*) override { return true; }
-    } landmarks;
+    GivenLandmarks landmarks;
     const auto stage = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
     ASSERT_TRUE(stage->info().available) << stage->info().detail;
     EXPECT_NE(stage->info().detail.find("brows and eyes"), std::string::npos) << stage->info().detail;

@@ -20,7 +20,7 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "train_refine"))
 from train_stage import Stage, export  # noqa: E402
-from train_refine import Refiner  # noqa: E402
+from train_refine import Refiner, export_onnx  # noqa: E402
 
 out = sys.argv[1] if len(sys.argv) > 1 else "tests/data"
 torch.manual_seed(3)
@@ -67,24 +67,21 @@ expression.eval()
 export(expression, os.path.join(out, "cnn_expression_fixture.onnx"))
 print(f"wrote {out}/cnn_expression_fixture.onnx")
 
-refiner = Refiner(32, widths=(4, 8), strides=(2, 2), hidden=8)
-randomise_batchnorm(refiner)
-with torch.no_grad():
-    refiner.head[-1].weight.zero_()
-    refiner.head[-1].bias.copy_(torch.tensor([3.0, 0.0] * 68))
-torch.onnx.export(refiner.eval(), torch.zeros(1, 1, 32, 32), os.path.join(out, "refiner_fixture.onnx"), opset_version=13,
-                  input_names=["patch"], output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
-print(f"wrote {out}/refiner_fixture.onnx")
+def constant_refiner(points, name):
+    """A refiner of train_refine.py's layers on a 32 px patch whose offsets are constant: every point (+3, 0)."""
+    net = Refiner(32, widths=(4, 8), strides=(2, 2), hidden=8)
+    if points != 68:
+        net.head[-1] = torch.nn.Linear(8, 2 * points)
+    randomise_batchnorm(net)
+    with torch.no_grad():
+        net.head[-1].weight.zero_()
+        net.head[-1].bias.copy_(torch.tensor([3.0, 0.0] * points))
+    export_onnx(net, 32, os.path.join(out, name))
+    print(f"wrote {out}/{name}")
 
-side = Refiner(32, widths=(4, 8), strides=(2, 2), hidden=8)
-side.head[-1] = torch.nn.Linear(8, 22)
-randomise_batchnorm(side)
-with torch.no_grad():
-    side.head[-1].weight.zero_()
-    side.head[-1].bias.copy_(torch.tensor([3.0, 0.0] * 11))
-torch.onnx.export(side.eval(), torch.zeros(1, 1, 32, 32), os.path.join(out, "side_fixture.onnx"), opset_version=13,
-                  input_names=["patch"], output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
-print(f"wrote {out}/side_fixture.onnx")
+
+constant_refiner(68, "refiner_fixture.onnx")
+constant_refiner(11, "side_fixture.onnx")
 
 # The gaze stage's iris-net fixture (tests/test_gaze.cpp): 2 x 1 x 28 x 40 -> 2 x 3 x 14 x 20 like
 # tools/train_eyes/train_iris_net.py's nets, but each cell's scores come from its own patch pixel

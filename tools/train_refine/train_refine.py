@@ -388,10 +388,14 @@ def region_shares(validation, refined):
     return share
 
 
-def export(net, mean, share, ramp, size, out):
-    net = net.without_auxiliary().eval()
-    torch.onnx.export(net, torch.zeros(1, 1, size, size), out + ".onnx", opset_version=13, input_names=["patch"],
+def export_onnx(net, size, path):
+    """`net` on a 1 x 1 x size x size patch as ONNX at opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads."""
+    torch.onnx.export(net.eval(), torch.zeros(1, 1, size, size), path, opset_version=13, input_names=["patch"],
                       output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+
+
+def export(net, mean, share, ramp, size, out):
+    export_onnx(net.without_auxiliary(), size, out + ".onnx")
     with open(out + ".refiner.txt", "w") as f:
         f.write(f"{size}\n" + " ".join(f"{v:.6f}" for v in mean.reshape(-1)) + "\n" + " ".join(f"{v:.2f}" for v in share) + "\n")
         if ramp:

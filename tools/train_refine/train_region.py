@@ -26,7 +26,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from train_refine import MIRROR, Refiner, photometric, read_points, similarity, standardise, warp
+from train_refine import MIRROR, Refiner, export_onnx, photometric, read_points, similarity, standardise, warp
 
 torch.set_flush_denormal(True)
 
@@ -235,9 +235,7 @@ def main():
             for name, pts in (("pipeline", turned.init), ("net", refined), ("blend", blended(refined, turned, share))):
                 print(summary(f"turned validation copies {name} (over sqrt(box))", pts, turned))
         if a.export:
-            net.eval()
-            torch.onnx.export(net, torch.zeros(1, 1, a.size, a.size), a.out + ".onnx", opset_version=13, input_names=["patch"],
-                              output_names=["offsets"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+            export_onnx(net, a.size, a.out + ".onnx")
             w = np.zeros(len(RIGHT))
             w[BROWS], w[EYES] = share["brows"], share["eyes"]
             with open(a.out + ".side.txt", "w") as f:
