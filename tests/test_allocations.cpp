@@ -89,7 +89,7 @@ TEST(Allocations, NonePerTrackedFrameAfterWarmUp) {
 
 // With the shipped CNN file, a tracked frame allocates exactly what one run of the refiner does
 // (OpenCV's dnn and warpAffine), or two where the stage runs its second round, and the brow and eye
-// refiner's two runs when the file has it, and nothing else
+// refiner's one run on both sides when the file has it, and nothing else
 // (docs/architecture.md: own kernels would remove it).
 // On one OpenCV thread: with a pool, what a run allocates depends on which worker joined it and
 // whether that worker had run the net before (CI saw 130 against 127 in one process).
@@ -117,19 +117,22 @@ TEST(Allocations, WithTheRefinerOnlyItsNetAllocates) {
         EXPECT_TRUE(refined.allFinite());
         perRun = allocations.load() - before;
     }
-    // And, with the brow and eye refiner, its two runs (one per side) after the refiner's.
+    // And, with the brow and eye refiner, its run on both sides at once, after the refiner's.
     long sides = 0;
     if (!d.side_net.empty()) {
         const cnn::SideLayout sideLayout = cnn::makeSideLayout(d);
-        cnn::PatchNet sideNet(d.side_net, sideLayout.size, 22, "brow and eye refiner");
+        cnn::PatchNet sideNet(d.side_net, sideLayout.size, 22, "brow and eye refiner", 2);
+        std::array<cv::Mat, 2> sidePatches;
+        std::array<cv::Matx23d, 2> toFrame;
         for (int run = 0; run < 2; ++run) {
             const long before = allocations.load();
             landmarks::Shape68 refined = points;
-            for (const bool mirrored : {false, true}) {
-                const cv::Matx23d toFrame = cnn::sidePatchToFrame(sideLayout, cnn::sidePoints(refined, mirrored, gray.cols), mirrored, gray.cols);
-                cnn::warpSide(sideLayout, gray, toFrame, patch);
-                cnn::placeSide(sideLayout, toFrame, sideNet.predict(patch), mirrored, refined);
+            for (const int b : {0, 1}) {
+                toFrame[b] = cnn::sidePatchToFrame(sideLayout, cnn::sidePoints(refined, b == 1, gray.cols), b == 1, gray.cols);
+                cnn::warpSide(sideLayout, gray, toFrame[b], sidePatches[b]);
             }
+            const Eigen::VectorXd& e = sideNet.predict(sidePatches);
+            for (const int b : {0, 1}) cnn::placeSide(sideLayout, toFrame[b], e.segment(22 * b, 22), b == 1, refined);
             EXPECT_TRUE(refined.allFinite());
             sides = allocations.load() - before;
         }
@@ -142,7 +145,7 @@ TEST(Allocations, WithTheRefinerOnlyItsNetAllocates) {
         twice += tracked[i] == 2 * perRun + sides;
     }
     std::printf("%zu tracked frames, each %ld allocations: one run of the refiner (cv::dnn, cv::warpAffine), %ld of the brow and "
-                "eye refiner's two; %d with a second run of the refiner\n",
+                "eye refiner's (both sides in one run); %d with a second run of the refiner\n",
                 tracked.size(), perRun + sides, sides, twice);
     EXPECT_GT(tracked.size(), 120u);
     cv::setNumThreads(threads);

@@ -149,6 +149,20 @@ TEST(CnnLandmarks, DisplacementsAreInPatchPixelsWhateverTheFacesPlaceSizeAndRoll
     EXPECT_NEAR(std::abs(std::atan2(moved.y(), moved.x())) * 180.0 / M_PI, 30.0, 1.0);
 }
 
+TEST(PatchNet, ABatchGivesEachPatchItsOwnOutputs) {
+    const std::string onnx = parityCascade().stages[0].onnx;
+    cnn::PatchNet one(onnx, 64, 6 + 1, "parity"), two(onnx, 64, 6 + 1, "parity, two at a time", 2);
+    std::array<cv::Mat, 2> patches = {cv::Mat(64, 64, CV_8U), cv::Mat(64, 64, CV_8U)};
+    cv::randu(patches[0], 0, 255);
+    cv::randu(patches[1], 40, 90);
+    const Eigen::VectorXd both = two.predict(patches);
+    ASSERT_EQ(both.size(), 14);
+    EXPECT_EQ(two.outputCount(), 7);
+    for (const int b : {0, 1}) EXPECT_LT((both.segment(7 * b, 7) - one.predict(patches[b])).cwiseAbs().maxCoeff(), 1e-5) << b;
+    EXPECT_GT((both.head(7) - both.tail(7)).cwiseAbs().maxCoeff(), 1e-3);  // two different patches, two answers
+    EXPECT_THROW(two.predict(patches[0]), Error);  // one patch for a net of two
+}
+
 TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
     const auto face = FaceModel::load(test::shippedFaceModel());
     const auto& names = face->expressionNames();

@@ -86,7 +86,7 @@ void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& 
     cv::warpAffine(gray, patch, toFrame, cv::Size(layout.size, layout.size), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
 }
 
-void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::VectorXd& e, bool mirrored, landmarks::Shape68& shape) {
+void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored, landmarks::Shape68& shape) {
     const auto& index = mirrored ? kLeftSide : kRightSide;
     const SideShape patch = layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 11>>(e.data()).cast<float>();
     for (std::size_t i = 0; i < index.size(); ++i) {

@@ -35,7 +35,8 @@
 // (else the identity), and the net's offsets e put the points at
 // M(B (n_i + e_i) + c); each is blended with q by its own share v_i. The
 // brows and eyes are thin: a patch of one side sees them at about twice the
-// face patch's resolution (docs/cnn.md, session 28).
+// face patch's resolution (docs/cnn.md, session 28). The refine stage reads
+// both sides' patches in one call of the net (session 29).
 
 #include "cnn/cnn_model_data.hpp"
 #include "core/shape2d.hpp"
@@ -101,7 +102,7 @@ void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& 
 
 /// `shape` with one side's 11 points moved to the net's outputs e (22 values: x_0, y_0, ...),
 /// blended by the shares.
-void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::VectorXd& e, bool mirrored, landmarks::Shape68& shape);
+void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored, landmarks::Shape68& shape);
 
 /// q above from the net's outputs d, g from this face alone (a still image).
 landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,

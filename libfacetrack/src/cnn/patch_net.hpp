@@ -5,13 +5,16 @@
 // (docs/cnn.md).
 //
 // The net's input is the patch standardised per patch, (I - mean) / sigma
-// (population sigma, I in [0, 1]), as the training script does.
+// (population sigma, I in [0, 1]), as the training script does. A net may
+// read a batch of patches in one call (the brow and eye refiner's two sides):
+// one call of OpenCV's dnn costs about as much as a small net's arithmetic.
 
 #include "core/onnx_net.hpp"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <span>
 #include <string>
 
 namespace facetrack::cnn {
@@ -19,20 +22,25 @@ namespace facetrack::cnn {
 class PatchNet {
 public:
     /// A net from an ONNX file's bytes; `what` names it in errors. Throws
-    /// Error when it does not load or is not a net of 1 x size x size ->
-    /// `outputs` values.
-    PatchNet(const std::string& onnx, int patchSize, int outputs, const std::string& what);
+    /// Error when it does not load or is not a net of batch x 1 x size x size
+    /// -> batch x `outputs` values.
+    PatchNet(const std::string& onnx, int patchSize, int outputs, const std::string& what, int batch = 1);
 
-    int outputCount() const { return static_cast<int>(output_.size()); }
+    /// The values per patch.
+    int outputCount() const { return outputs_; }
 
-    /// The outputs for `patch` (CV_8U, patchSize x patchSize). Not thread-safe
-    /// (the net keeps its buffers): one per thread.
+    /// The outputs for `patch` (CV_8U, patchSize x patchSize), for a net of
+    /// batch 1. Not thread-safe (the net keeps its buffers): one per thread.
     const Eigen::VectorXd& predict(const cv::Mat& patch);
+    /// The outputs for the batch's patches, patch b's at
+    /// segment(b * outputCount(), outputCount()).
+    const Eigen::VectorXd& predict(std::span<const cv::Mat> patches);
 
 private:
     core::OnnxNet net_;
     int size_;
-    Eigen::VectorXd output_;
+    int outputs_;
+    Eigen::VectorXd output_;  ///< batch x outputs_
 };
 
 }  // namespace facetrack::cnn

@@ -5,6 +5,7 @@
 #include "cnn/patch_net.hpp"
 #include "landmarks/lbf.hpp"
 
+#include <array>
 #include <optional>
 
 namespace facetrack::cnn {
@@ -28,7 +29,7 @@ public:
         if (!model_->data().side_net.empty()) {
             side_layout_ = makeSideLayout(model_->data());
             side_net_.emplace(model_->data().side_net, side_layout_.size, 2 * static_cast<int>(kRightSide.size()),
-                              "brow and eye refiner '" + model_->sourcePath() + "'");
+                              "brow and eye refiner '" + model_->sourcePath() + "'", 2);
         }
     }
 
@@ -61,11 +62,17 @@ public:
             refined = blendedLandmarks(layout_, net, lbf, trust);
         }
         if (side_net_ && refined.allFinite()) {
-            for (const bool mirrored : {false, true}) {
-                const cv::Matx23d toFrame = sidePatchToFrame(side_layout_, sidePoints(refined, mirrored, frame.gray.cols), mirrored, frame.gray.cols);
-                warpSide(side_layout_, frame.gray, toFrame, side_patch_);
+            const int width = frame.gray.cols;
+            std::array<cv::Matx23d, 2> toFrame;
+            for (const int b : {0, 1}) {  // the right side, then the left mirrored: one call of the net for both
+                toFrame[b] = sidePatchToFrame(side_layout_, sidePoints(refined, b == 1, width), b == 1, width);
+                warpSide(side_layout_, frame.gray, toFrame[b], side_patches_[b]);
+            }
+            const Eigen::VectorXd& e = side_net_->predict(side_patches_);
+            const int n = side_net_->outputCount();
+            for (const int b : {0, 1}) {
                 landmarks::Shape68 placed = refined;
-                placeSide(side_layout_, toFrame, side_net_->predict(side_patch_), mirrored, placed);
+                placeSide(side_layout_, toFrame[b], e.segment(b * n, n), b == 1, placed);
                 if (placed.allFinite()) refined = placed;  // a degenerate side keeps the refiner's points
             }
         }
@@ -80,7 +87,8 @@ private:
     PatchNet net_;
     SideLayout side_layout_;
     std::optional<PatchNet> side_net_;  ///< the brow and eye refiner, if the file has one
-    cv::Mat patch_, side_patch_;  // each its own size: reused, never reallocated
+    cv::Mat patch_;
+    std::array<cv::Mat, 2> side_patches_;  // each its own size: reused, never reallocated
 };
 
 }  // namespace
