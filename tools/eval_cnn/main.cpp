@@ -114,8 +114,10 @@ void report(const char* name, const RoundErrors& e) {
 /// frame sat `yaw` and `scale` away: frame 1 is the crop profiled to its label
 /// turned by d ~ U(-Y, Y) deg (profile::turnedBy; copies more than 15 % hidden
 /// are drawn again) and scaled by 1 + U(-D, D) about its annotation's centre,
-/// found by YuNet; frame 2 is the crop itself, followed with no detection
-/// (where frame 2 loses the face, also as a live tracker goes on: the same frame searched again).
+/// found by YuNet; frame 2 is the crop itself, followed with no full-frame search
+/// (the tracker's own check near a face that no stage could place runs, as it does
+/// live; where frame 2 still loses the face, also as a live tracker goes on: the
+/// same frame searched again).
 /// Frame 2's pose is compared with
 ///   - the label, after the mean rotation C between the tracker's poses and the
 ///     labels on the training crops (R_tracker ~ R_label C: the fit and the
@@ -251,11 +253,12 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
                 "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
                 trainCrops, angleDeg(offset), offsetDeg.x(), offsetDeg.y(), offsetDeg.z());
     const auto line = [](const char* name, const std::vector<double>& deg) {
+        if (deg.empty()) return (void)std::printf("  %-54s %5d\n", name, 0);
         std::printf("  %-54s %5zu, mean %5.2f median %5.2f deg, within 3 deg %5.1f %%\n", name, deg.size(), meanOf(deg), medianOf(deg),
                     within3(deg));
     };
     std::printf("%d %s crops x %d starts: frame 1 the crop turned by yaw +-%.0f deg (uniform) and scaled by +-%.0f %%, frame 2 the crop, "
-                "followed with no detector (starts lost: %d on frame 1, %d on frame 2; %d crops not followed unperturbed)\n",
+                "followed with no full-frame search (starts lost: %d on frame 1, %d on frame 2; %d crops not followed unperturbed)\n",
                 crops, split.c_str(), starts, yawDeg, 100.0 * depth, lostFirst, lostSecond, unfollowed);
     line("start (frame 1's pose) to the label", startDeg);
     line("frame 2 to the label (after C)", toLabel);

@@ -88,7 +88,7 @@ struct FaceEstimates {
 };
 
 struct FaceResult {
-    int id = 0;               ///< stable while the face is followed; a face found again gets a new id
+    int id = 0;               ///< stable while the face is followed, also when the tracker finds it again near where it was; a face lost and found by a new search gets a new id
     bool tracked = false;     ///< true when followed from the previous frame, false when freshly detected
     /// 0..1: 1 - fit_residual / TrackerConfig::max_fit_residual once fitted;
     /// the detector's score when the landmarks stage is not available.

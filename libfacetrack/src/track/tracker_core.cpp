@@ -180,10 +180,10 @@ bool TrackerCore::verify(pipeline::FaceTrack& face, Check why) {
     const std::optional<Box> found = findAgain(face);
     time(kVerify, start);
     if (!found) {
-        face.lost = why == Check::Periodic;
+        face.lost = why != Check::InDoubt;
         return false;
     }
-    if (agrees(face.box, *found, why == Check::InDoubt ? kAgreeAcrossInDoubt : kAgreeAcross)) return false;
+    if (why != Check::Unplaced && agrees(face.box, *found, why == Check::InDoubt ? kAgreeAcrossInDoubt : kAgreeAcross)) return false;
     // The detector sees the face elsewhere: the stages start again from its box,
     // unless another followed face is already there.
     const bool taken = std::any_of(tracks_.begin(), tracks_.end(), [&](const pipeline::FaceTrack& t) {
@@ -293,6 +293,13 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
         if (!tracks_.empty()) ensureGray();
         for (auto& t : tracks_) {
             runStages(input, t);
+            // A followed face no stage could place (the fit past its limits after a fast
+            // move) is looked for where it was: found, it runs again from the detection and
+            // keeps its id and what its stages hold (the identity); else it is lost.
+            if (t.lost && !t.fresh && settings_.verify_interval > 0 && verify(t, Check::Unplaced)) {
+                t.located = false;
+                runStages(input, t);
+            }
             bool seen = !t.lost && appearanceOf(gray_, t.box, appearance_);
             if (seen && !t.fresh && !t.appearance.empty() && alike(appearance_, t.appearance) < kAlike) t.doubtful = true;
             // A face a stage doubts is checked now; one the detector sees elsewhere runs

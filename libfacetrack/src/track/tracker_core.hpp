@@ -53,13 +53,16 @@ private:
     void detect(const ImageView& frame);
     /// The detection nearest the face's centre on a crop around it, in frame pixels.
     std::optional<Box> findAgain(const pipeline::FaceTrack& face);
-    /// Why a followed face is checked: now and then (nothing found: lost), or
+    /// Why a followed face is checked: now and then (nothing found: lost),
     /// because a stage doubts it (nothing found: kept, as blur hides faces from
-    /// the detector too; found: it must agree more closely).
-    enum class Check { Periodic, InDoubt };
+    /// the detector too; found: it must agree more closely), or because a stage
+    /// could not place it (nothing found: lost; found: it restarts from there
+    /// wherever the box was).
+    enum class Check { Periodic, InDoubt, Unplaced };
     /// Checks a followed face with the detector. Found where the face's box
-    /// does not agree: the face restarts from the detection (fresh; returns
-    /// true), or is lost when another followed face is there already.
+    /// does not agree (or, Unplaced, anywhere near): the face restarts from the
+    /// detection (fresh, with its id and its stages' state; returns true), or is
+    /// lost when another followed face is there already.
     bool verify(pipeline::FaceTrack& face, Check why);
     void runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face);
     void dropLost();
