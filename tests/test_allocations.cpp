@@ -123,16 +123,10 @@ TEST(Allocations, WithTheRefinerOnlyItsNetAllocates) {
         const cnn::SideLayout sideLayout = cnn::makeSideLayout(d);
         cnn::PatchNet sideNet(d.side_net, sideLayout.size, 22, "brow and eye refiner", 2);
         std::array<cv::Mat, 2> sidePatches;
-        std::array<cv::Matx23d, 2> toFrame;
         for (int run = 0; run < 2; ++run) {
             const long before = allocations.load();
             landmarks::Shape68 refined = points;
-            for (const int b : {0, 1}) {
-                toFrame[b] = cnn::sidePatchToFrame(sideLayout, cnn::sidePoints(refined, b == 1, gray.cols), b == 1, gray.cols);
-                cnn::warpSide(sideLayout, gray, toFrame[b], sidePatches[b]);
-            }
-            const Eigen::VectorXd& e = sideNet.predict(sidePatches);
-            for (const int b : {0, 1}) cnn::placeSide(sideLayout, toFrame[b], e.segment(22 * b, 22), b == 1, refined);
+            cnn::refineSides(sideLayout, sideNet, gray, sidePatches, refined);
             EXPECT_TRUE(refined.allFinite());
             sides = allocations.load() - before;
         }

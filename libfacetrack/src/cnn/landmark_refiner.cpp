@@ -1,5 +1,6 @@
 #include "cnn/landmark_refiner.hpp"
 
+#include "cnn/patch_net.hpp"
 #include "facetrack/error.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -96,6 +97,22 @@ void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen
                                   static_cast<float>(toFrame(1, 0) * u + toFrame(1, 1) * v + toFrame(1, 2)));
         const float w = layout.share[static_cast<Eigen::Index>(i)];
         shape.col(index[i]) = w * net + (1.f - w) * shape.col(index[i]);
+    }
+}
+
+void refineSides(const SideLayout& layout, PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape) {
+    const int width = gray.cols;
+    std::array<cv::Matx23d, 2> toFrame;
+    for (const int b : {0, 1}) {  // the right side, then the left mirrored
+        toFrame[b] = sidePatchToFrame(layout, sidePoints(shape, b == 1, width), b == 1, width);
+        warpSide(layout, gray, toFrame[b], patches[b]);
+    }
+    const Eigen::VectorXd& e = net.predict(patches);
+    const int n = net.outputCount();
+    for (const int b : {0, 1}) {
+        landmarks::Shape68 placed = shape;
+        placeSide(layout, toFrame[b], e.segment(b * n, n), b == 1, placed);
+        if (placed.allFinite()) shape = placed;
     }
 }
 

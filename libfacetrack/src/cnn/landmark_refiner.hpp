@@ -50,6 +50,8 @@
 
 namespace facetrack::cnn {
 
+class PatchNet;
+
 struct RefinerLayout {
     int size = 0;                       ///< the patch's side, pixels
     landmarks::Shape68 mean;            ///< m above
@@ -103,6 +105,11 @@ void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& 
 /// `shape` with one side's 11 points moved to the net's outputs e (22 values: x_0, y_0, ...),
 /// blended by the shares.
 void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored, landmarks::Shape68& shape);
+
+/// Both sides of `shape` moved by the side net `net` (batch 2) in one call: each side's patch
+/// (warpSide) into `patches` (reused), the net's answers placed (placeSide). A side whose
+/// answer is not finite keeps its points.
+void refineSides(const SideLayout& layout, PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape);
 
 /// q above from the net's outputs d, g from this face alone (a still image).
 landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,

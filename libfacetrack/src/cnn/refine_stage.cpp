@@ -61,21 +61,7 @@ public:
             trust = face.fresh ? now : 0.5f * (now + previous);
             refined = blendedLandmarks(layout_, net, lbf, trust);
         }
-        if (side_net_ && refined.allFinite()) {
-            const int width = frame.gray.cols;
-            std::array<cv::Matx23d, 2> toFrame;
-            for (const int b : {0, 1}) {  // the right side, then the left mirrored: one call of the net for both
-                toFrame[b] = sidePatchToFrame(side_layout_, sidePoints(refined, b == 1, width), b == 1, width);
-                warpSide(side_layout_, frame.gray, toFrame[b], side_patches_[b]);
-            }
-            const Eigen::VectorXd& e = side_net_->predict(side_patches_);
-            const int n = side_net_->outputCount();
-            for (const int b : {0, 1}) {
-                landmarks::Shape68 placed = refined;
-                placeSide(side_layout_, toFrame[b], e.segment(b * n, n), b == 1, placed);
-                if (placed.allFinite()) refined = placed;  // a degenerate side keeps the refiner's points
-            }
-        }
+        if (side_net_ && refined.allFinite()) refineSides(side_layout_, *side_net_, frame.gray, side_patches_, refined);
         face.result.landmarks = landmarks::toLandmarks68(refined);
         face.locate(landmarks::boundsOf(refined));
         return true;
