@@ -19,8 +19,17 @@ the pipeline's), on the sum of each set's error relative to the pipeline's; the 
 --evaluate test. --export writes the best epoch as
 OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads) and OUT.side.txt (patch size, the
 22 mean-shape values, the 11 shares) for pack_cnn --sides.
+
+--expressions CSV (session 30, tried, not shipped: docs/cnn.md): the net also reads the side's brow shapes (browDown,
+browInnerUp, browOuterUp of that side) from label_dense's faces300w.csv, the dense teacher labels (MediaPipe's mesh
+fitted with the face model: another model's predictions, not ground truth); a turned copy carries its crop's labels.
+--init starts from a trained net (its point rows kept). The log adds each shape's Pearson r and mean absolute error on
+the validation sides, and the epoch is chosen on the points' score plus the readings' error over a constant guess's:
+
+    /usr/bin/python3 tools/train_refine/train_region.py --out build/region/e8 --widths 8,16,32,64 --strides 2,2,2,2 --hidden 128 \
+        --profiled build/profiled --minutes 15 --expressions build/dense_labels/faces300w.csv --init build/region/c8.best.pt --lr 5e-4
 """
-import argparse, math, os, time
+import argparse, csv, math, os, re, time
 
 import numpy as np
 import torch
@@ -34,15 +43,18 @@ PIPELINE = "facetrack LBF + refiner"
 RIGHT = list(range(17, 22)) + list(range(36, 42))  # the subject's right brow and eye (image left)
 LEFT = [MIRROR[i] for i in RIGHT]  # the same points of the other side, in the same order once mirrored
 BROWS, EYES = slice(0, 5), slice(5, 11)  # within a side's 11 points
+# --expressions: the side's brow shapes, read from its patch beside its points (dense teacher labels: MediaPipe's mesh
+# fitted with the face model, not ground truth). The right side's patch reads the subject's right brow (_R).
+EXPRESSIONS = ("browDown", "browInnerUp", "browOuterUp")
 
 
 class Sides:
     """Every face of a split, both sides: image (mirrored for the left side), annotation, pipeline points and the
     patch -> image similarity from the pipeline's points."""
 
-    def __init__(self, images, points, mean, keys, by_box=False):
+    def __init__(self, images, points, mean, keys, by_box=False, labels=None, names=None):
         self.keys = sorted(keys)
-        crops, truth, init, flipped, norm = [], [], [], [], []
+        crops, truth, init, flipped, norm, expr = [], [], [], [], [], []
         for k in self.keys:
             ann, pipe = points[k]
             # the error's unit: the outer-eye-corner distance (300-W's NME), or for turned copies, whose eye
@@ -59,7 +71,10 @@ class Sides:
                 init.append(p)
                 flipped.append(flip)
                 norm.append(unit)
+                label = labels.get(source_key(names[k])) if labels is not None else None
+                expr.append(np.full(len(EXPRESSIONS), np.nan) if label is None else label["L" if flip else "R"])
         self.images = torch.stack(crops)
+        self.expr = np.stack(expr)
         self.truth, self.init, self.flipped, self.norm = np.stack(truth), np.stack(init), np.array(flipped), np.array(norm)
         self.width = self.images.shape[-1]
         sims = [similarity(mean, p) for p in self.init]
@@ -69,9 +84,24 @@ class Sides:
     def join(self, other):
         """These sides and the other's, as one set."""
         self.images = torch.cat([self.images, other.images])
-        for name in ("truth", "init", "flipped", "norm", "A", "t"):
+        for name in ("truth", "init", "flipped", "norm", "A", "t", "expr"):
             setattr(self, name, np.concatenate([getattr(self, name), getattr(other, name)]))
         return self
+
+
+def source_key(name):
+    """The 300-W crop a name is, or was profiled from ("afw/1_1@0_yaw+35.pgm" -> "afw/1_1.jpg")."""
+    m = re.match(r"(.*)@\d+_yaw[-+]\d+\.pgm$", name)
+    return m.group(1) + ".jpg" if m else name
+
+
+def read_expression_labels(path):
+    """{crop key: {"L": 3 values, "R": 3 values}} of EXPRESSIONS from label_dense's faces300w.csv."""
+    out = {}
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            out[row["key"]] = {side: np.array([float(row[f"{e}_{side}"]) for e in EXPRESSIONS]) for side in "LR"}
+    return out
 
 
 def side_mean(shapes, size):
@@ -102,20 +132,23 @@ def batch(sides, idx, mean, size, rng, augment):
     if augment:
         x = photometric(x, rng)
     target = torch.from_numpy((truth - mean[None]).reshape(n, -1)).float()
-    return standardise(x), target, A, t
+    return standardise(x), target, A, t, torch.from_numpy(sides.expr[idx]).float()
 
 
-def predict(net, sides, mean, size):
-    """The refined side points in (possibly mirrored) image pixels, N x 11 x 2."""
+def predict(net, sides, mean, size, with_expressions=False):
+    """The refined side points in (possibly mirrored) image pixels, N x 11 x 2; with_expressions: and the brow
+    readings, N x len(EXPRESSIONS) (empty columns for a net without them)."""
     net.eval()
-    out = []
+    out, readings = [], []
     with torch.no_grad():
         for start in range(0, len(sides.truth), 256):
             idx = np.arange(start, min(start + 256, len(sides.truth)))
-            x, _, A, t = batch(sides, idx, mean, size, None, augment=False)
-            u = net(x).numpy().reshape(-1, len(RIGHT), 2) + mean[None]
+            x, _, A, t, _ = batch(sides, idx, mean, size, None, augment=False)
+            y = net(x).numpy()
+            u = y[:, :2 * len(RIGHT)].reshape(-1, len(RIGHT), 2) + mean[None]
             out.append(np.einsum("bij,bnj->bni", A, u) + t[:, None, :])
-    return np.concatenate(out)
+            readings.append(y[:, 2 * len(RIGHT):])
+    return (np.concatenate(out), np.concatenate(readings)) if with_expressions else np.concatenate(out)
 
 
 def errors(points, sides):
@@ -151,6 +184,16 @@ def summary(name, points, sides):
     return f"{name}: brows {100 * e[:, BROWS].mean():.2f} %, eyes {100 * e[:, EYES].mean():.2f} %"
 
 
+def expression_summary(name, got, sides):
+    """Per brow shape, Pearson r and mean absolute error against the labels (both sides pooled)."""
+    parts = []
+    for j, e in enumerate(EXPRESSIONS):
+        known = ~np.isnan(sides.expr[:, j])
+        r = np.corrcoef(got[known, j], sides.expr[known, j])[0, 1]
+        parts.append(f"{e} r {r:.2f} mae {np.abs(got[known, j] - sides.expr[known, j]).mean():.3f}")
+    return f"{name}: " + ", ".join(parts)
+
+
 def whole_face(points_csv, names, sides, refined):
     """The 68-point NME of the pipeline, and with its brow and eye points replaced by `refined`."""
     points = read_points(points_csv, names, PIPELINE)
@@ -179,11 +222,18 @@ def main():
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--profiled", help="the large-pose copies' folder (make_profiled_faces; DIR/S/faces.npz by load_faces.py), with "
                                       "DATA/profiled_points_S.csv (eval-landmarks DIR/S --points-out): joined to training and validation")
+    p.add_argument("--expressions", metavar="CSV", help="label_dense's faces300w.csv: the net reads the side's brow shapes "
+                                                         "too (EXPRESSIONS), trained on these labels")
+    p.add_argument("--expression-weight", type=float, default=10.0)
+    p.add_argument("--init", metavar="PT", help="start from this .best.pt (its last layer's rows for the points kept)")
+    p.add_argument("--lr", type=float, default=1e-3)
     p.add_argument("--evaluate", choices=["validation", "test"])
     p.add_argument("--export", action="store_true")
     p.add_argument("--brows-only", action="store_true",
                    help="the eyes' share 0: their points stay the pipeline's (the gaze stage's synthetic renders read worse with the net's)")
     a = p.parse_args()
+    if a.export and a.expressions:
+        raise SystemExit("--export: the refine stage reads 22 outputs a side; a net with brow readings is not exported")
     torch.set_num_threads(a.threads)
     data = np.load(a.faces)
     names = list(data["names"])
@@ -195,21 +245,33 @@ def main():
         left[:, 0] = 255 - left[:, 0]
         shapes += [ann[RIGHT], left]
     mean = side_mean(shapes, a.size)
-    train = Sides(data["images"], points["train"], mean, points["train"].keys())
-    val = Sides(data["images"], points["validation"], mean, points["validation"].keys())
+    labels = read_expression_labels(a.expressions) if a.expressions else None
+    train = Sides(data["images"], points["train"], mean, points["train"].keys(), labels=labels, names=names)
+    val = Sides(data["images"], points["validation"], mean, points["validation"].keys(), labels=labels, names=names)
     sets = [val]
     if a.profiled:
         for split in ("train", "validation"):
             copies = np.load(os.path.join(a.profiled, split, "faces.npz"))
             turned_points = read_points(os.path.join(a.data, f"profiled_points_{split}.csv"), list(copies["names"]), PIPELINE)
-            turned = Sides(copies["images"], turned_points, mean, turned_points.keys(), by_box=True)
+            turned = Sides(copies["images"], turned_points, mean, turned_points.keys(), by_box=True, labels=labels,
+                           names=list(copies["names"]))
             if split == "train":
                 train.join(turned)
             else:
                 sets.append(turned)
     net = Refiner(a.size, widths=tuple(int(v) for v in a.widths.split(",")), strides=tuple(int(v) for v in a.strides.split(",")),
                   hidden=a.hidden)
-    net.head[-1] = torch.nn.Linear(a.hidden, 2 * len(RIGHT))
+    readings = len(EXPRESSIONS) if a.expressions else 0
+    net.head[-1] = torch.nn.Linear(a.hidden, 2 * len(RIGHT) + readings)
+    if a.init:
+        start = torch.load(a.init)["net"]
+        last = [k for k in start if k.startswith("head.") and k.endswith(".weight")][-1]
+        own = net.state_dict()
+        for k in (last, last.replace("weight", "bias")):
+            rows = start[k].shape[0]
+            own[k][:rows] = start[k]
+            start[k] = own[k]
+        net.load_state_dict(start)
     print(f"{len(train.truth)} training sides, {len(val.truth)} validation; {sum(p.numel() for p in net.parameters())} parameters",
           flush=True)
     if a.evaluate:
@@ -221,12 +283,14 @@ def main():
         sides = val
         if a.evaluate == "test":
             test = read_points(csv("test"), names, PIPELINE)
-            sides = Sides(data["images"], test, mean, test.keys())
+            sides = Sides(data["images"], test, mean, test.keys(), labels=labels, names=names)
         refined = predict(net, sides, mean, a.size)
         print(f"net's share (validation): brows {share['brows']:.2f}, eyes {share['eyes']:.2f}")
         print(summary(f"{a.evaluate} pipeline", sides.init, sides))
         print(summary(f"{a.evaluate} net", refined, sides))
         print(summary(f"{a.evaluate} blend", blended(refined, sides, share), sides))
+        if a.expressions:
+            print(expression_summary(f"{a.evaluate} brow readings", predict(net, sides, mean, a.size, True)[1], sides))
         before, after = whole_face(csv(a.evaluate), names, sides, blended(refined, sides, share))
         print(f"{a.evaluate} 68-point NME: pipeline {100 * before:.2f} %, with the blend {100 * after:.2f} %")
         if a.evaluate == "validation" and len(sets) > 1:
@@ -244,21 +308,25 @@ def main():
         return
     for v in sets:
         print(summary("validation pipeline" if v is val else "turned validation copies' pipeline (over sqrt(box))", v.init, v), flush=True)
-    opt = torch.optim.AdamW(net.parameters(), lr=1e-3, weight_decay=1e-5)
+    opt = torch.optim.AdamW(net.parameters(), lr=a.lr, weight_decay=1e-5)
     rng = np.random.default_rng(0)
     budget, began, seconds, epoch, best = a.minutes * 60, time.time(), 0.0, 0, None
     log = open(a.out + ".log", "a")
     while time.time() - began < budget:
         start_time = time.time()
         net.train()
-        lr = 1e-3 * 0.5 * (1 + math.cos(math.pi * min(1.0, seconds / budget)))
+        lr = a.lr * 0.5 * (1 + math.cos(math.pi * min(1.0, seconds / budget)))
         for g in opt.param_groups:
             g["lr"] = lr
         order = rng.permutation(len(train.truth))
         losses = []
         for start in range(0, len(order) - a.batch + 1, a.batch):
-            x, target, _, _ = batch(train, order[start:start + a.batch], mean, a.size, rng, augment=True)
-            loss = F.smooth_l1_loss(net(x), target, beta=0.5)
+            x, target, _, _, expr = batch(train, order[start:start + a.batch], mean, a.size, rng, augment=True)
+            y = net(x)
+            loss = F.smooth_l1_loss(y[:, :target.shape[1]], target, beta=0.5)
+            if a.expressions:
+                known = ~torch.isnan(expr)
+                loss = loss + a.expression_weight * F.smooth_l1_loss(y[:, target.shape[1]:][known], expr[known], beta=0.1)
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -268,13 +336,20 @@ def main():
         refined = [predict(net, v, mean, a.size) for v in sets]
         share = shares(sets, refined)
         now = score(sets, refined, share)
+        reading = ""
+        if a.expressions:  # the readings' mean absolute error over a constant guess's (the training median), added
+            got = predict(net, val, mean, a.size, True)[1]
+            known = ~np.isnan(val.expr)
+            guess = np.nanmedian(train.expr, axis=0)
+            now += np.abs(got - val.expr)[known].mean() / np.abs(guess[None] - val.expr)[known].mean()
+            reading = expression_summary("readings", got, val) + "; "
         if best is None or now < best:
             best = now
             torch.save({"net": net.state_dict(), "mean": mean}, a.out + ".best.pt")
         turned = f"; turned copies' blend {summary('', blended(refined[1], sets[1], share), sets[1])}" if len(sets) > 1 else ""
         line = (f"epoch {epoch} lr {lr:.2e} loss {np.mean(losses):.4f} {summary('net', refined[0], val)}; blend "
                 f"(brows {share['brows']:.2f}, eyes {share['eyes']:.2f}) {summary('', blended(refined[0], val, share), val)}{turned}; "
-                f"score {now:.4f}, best {best:.4f} ({time.time() - start_time:.0f} s)")
+                f"{reading}score {now:.4f}, best {best:.4f} ({time.time() - start_time:.0f} s)")
         print(line, flush=True)
         log.write(line + "\n")
         log.flush()
