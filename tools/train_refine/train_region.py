@@ -135,9 +135,9 @@ def batch(sides, idx, mean, size, rng, augment):
     return standardise(x), target, A, t, torch.from_numpy(sides.expr[idx]).float()
 
 
-def predict(net, sides, mean, size, with_expressions=False):
-    """The refined side points in (possibly mirrored) image pixels, N x 11 x 2; with_expressions: and the brow
-    readings, N x len(EXPRESSIONS) (empty columns for a net without them)."""
+def predict(net, sides, mean, size):
+    """The refined side points in (possibly mirrored) image pixels, N x 11 x 2, and the brow readings,
+    N x len(EXPRESSIONS) (no columns for a net without them)."""
     net.eval()
     out, readings = [], []
     with torch.no_grad():
@@ -148,7 +148,7 @@ def predict(net, sides, mean, size, with_expressions=False):
             u = y[:, :2 * len(RIGHT)].reshape(-1, len(RIGHT), 2) + mean[None]
             out.append(np.einsum("bij,bnj->bni", A, u) + t[:, None, :])
             readings.append(y[:, 2 * len(RIGHT):])
-    return (np.concatenate(out), np.concatenate(readings)) if with_expressions else np.concatenate(out)
+    return np.concatenate(out), np.concatenate(readings)
 
 
 def errors(points, sides):
@@ -277,25 +277,25 @@ def main():
     if a.evaluate:
         saved = torch.load(a.out + ".best.pt")
         net.load_state_dict(saved["net"])
-        share = shares(sets, [predict(net, v, mean, a.size) for v in sets])
+        share = shares(sets, [predict(net, v, mean, a.size)[0] for v in sets])
         if a.brows_only:
             share["eyes"] = 0.0
         sides = val
         if a.evaluate == "test":
             test = read_points(csv("test"), names, PIPELINE)
             sides = Sides(data["images"], test, mean, test.keys(), labels=labels, names=names)
-        refined = predict(net, sides, mean, a.size)
+        refined, readings = predict(net, sides, mean, a.size)
         print(f"net's share (validation): brows {share['brows']:.2f}, eyes {share['eyes']:.2f}")
         print(summary(f"{a.evaluate} pipeline", sides.init, sides))
         print(summary(f"{a.evaluate} net", refined, sides))
         print(summary(f"{a.evaluate} blend", blended(refined, sides, share), sides))
         if a.expressions:
-            print(expression_summary(f"{a.evaluate} brow readings", predict(net, sides, mean, a.size, True)[1], sides))
+            print(expression_summary(f"{a.evaluate} brow readings", readings, sides))
         before, after = whole_face(csv(a.evaluate), names, sides, blended(refined, sides, share))
         print(f"{a.evaluate} 68-point NME: pipeline {100 * before:.2f} %, with the blend {100 * after:.2f} %")
         if a.evaluate == "validation" and len(sets) > 1:
             turned = sets[1]
-            refined = predict(net, turned, mean, a.size)
+            refined = predict(net, turned, mean, a.size)[0]
             for name, pts in (("pipeline", turned.init), ("net", refined), ("blend", blended(refined, turned, share))):
                 print(summary(f"turned validation copies {name} (over sqrt(box))", pts, turned))
         if a.export:
@@ -308,6 +308,9 @@ def main():
         return
     for v in sets:
         print(summary("validation pipeline" if v is val else "turned validation copies' pipeline (over sqrt(box))", v.init, v), flush=True)
+    if a.expressions:  # the constant guess (the training median) the readings' error is measured against
+        val_known = ~np.isnan(val.expr)
+        guess_error = np.abs(np.nanmedian(train.expr, axis=0)[None] - val.expr)[val_known].mean()
     opt = torch.optim.AdamW(net.parameters(), lr=a.lr, weight_decay=1e-5)
     rng = np.random.default_rng(0)
     budget, began, seconds, epoch, best = a.minutes * 60, time.time(), 0.0, 0, None
@@ -333,15 +336,14 @@ def main():
             losses.append(loss.item())
         epoch += 1
         seconds += time.time() - start_time
-        refined = [predict(net, v, mean, a.size) for v in sets]
+        predicted = [predict(net, v, mean, a.size) for v in sets]
+        refined = [points for points, _ in predicted]
         share = shares(sets, refined)
         now = score(sets, refined, share)
         reading = ""
         if a.expressions:  # the readings' mean absolute error over a constant guess's (the training median), added
-            got = predict(net, val, mean, a.size, True)[1]
-            known = ~np.isnan(val.expr)
-            guess = np.nanmedian(train.expr, axis=0)
-            now += np.abs(got - val.expr)[known].mean() / np.abs(guess[None] - val.expr)[known].mean()
+            got = predicted[0][1]  # sets[0] is val
+            now += np.abs(got - val.expr)[val_known].mean() / guess_error
             reading = expression_summary("readings", got, val) + "; "
         if best is None or now < best:
             best = now
