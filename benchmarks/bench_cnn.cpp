@@ -1,17 +1,22 @@
 // The cnn stage alone (warp into the 64 px patch, the net in OpenCV's dnn,
 // the update; per round) on a tracked 640x480 frame, beside the warm fit it
-// would refine, in the same run; and the refine stage alone. The cascade: $FACETRACK_CNN_CASCADE, else the
-// shipped models/cnn_cascade.ftm; skipped when neither exists (none is shipped
-// yet: docs/cnn.md says how to make one).
+// would refine, in the same run; the refine stage alone; and the refiners'
+// nets on either engine, the own kernels and OpenCV's dnn. The cascade:
+// $FACETRACK_CNN_CASCADE, else the shipped models/cnn_cascade.ftm; the cnn stage
+// is skipped when it has no cascade stages (none is shipped: docs/cnn.md).
 
 #include "bench_support.hpp"
 
+#include "cnn/cnn_model_data.hpp"
 #include "cnn/cnn_stage.hpp"
+#include "cnn/landmark_refiner.hpp"
+#include "core/onnx_net.hpp"
 #include "cnn/refine_stage.hpp"
 #include "fit/fit_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
 #include "facetrack/facetrack.hpp"
 
+#include <opencv2/core.hpp>
 
 namespace facetrack::bench {
 namespace {
@@ -89,6 +94,38 @@ void BM_Refine_Stage(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_Refine_Stage)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
+
+/// One call of a refiner's net on a standardised random input. Arg 0: the landmark refiner (one
+/// patch) or the brow and eye refiner (both sides); arg 1: the own kernels (0) or OpenCV's dnn (1).
+/// Compare the two engines within one run.
+void BM_Net(benchmark::State& state) {
+    const std::string path = benchCascadePath();
+    if (path.empty()) {
+        failBenchmark(state, "no CNN file at " + CnnModel::defaultPath());
+        return;
+    }
+    const bool sides = state.range(0) == 1;
+    const std::string name = sides ? "brow and eye refiner" : "landmark refiner";
+    std::shared_ptr<const CnnModel> model;
+    try {
+        model = CnnModel::load(path);
+    } catch (const Error& e) {
+        failBenchmark(state, e.what());
+        return;
+    }
+    const std::string& onnx = sides ? model->data().side_net : model->data().refiner_net;
+    if (onnx.empty()) {
+        state.SkipWithError(("no " + name + " in " + path).c_str());
+        return;
+    }
+    const int size = sides ? cnn::makeSideLayout(model->data()).size : cnn::makeRefinerLayout(model->data()).size;
+    const auto engine = state.range(1) == 0 ? core::OnnxNet::Engine::Own : core::OnnxNet::Engine::OpenCvDnn;
+    core::OnnxNet net(onnx, {sides ? 2 : 1, 1, size, size}, sides ? 2 * 22 : 136, name, engine);
+    cv::randn(net.input(), 0.0, 1.0);
+    for (auto _ : state) benchmark::DoNotOptimize(net.forward());
+    state.SetLabel(name + (net.engine() == core::OnnxNet::Engine::Own ? ", own kernels" : ", OpenCV's dnn"));
+}
+BENCHMARK(BM_Net)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMicrosecond)->MinTime(minTime(1.0));
 
 }  // namespace
 }  // namespace facetrack::bench

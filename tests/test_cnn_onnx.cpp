@@ -1,5 +1,6 @@
 // The CNN export path (tools/train_cnn, docs/cnn.md): a net exported by train_stage.py's export()
-// loads in OpenCV's dnn and gives torch's outputs (fixture: tools/train_cnn/make_parity_fixture.py);
+// loads in OpenCV's dnn and gives torch's outputs (fixture: tools/train_cnn/make_parity_fixture.py),
+// and so do the own kernels that run the nets;
 // the cascade's file format; the landmark net's geometry; the cnn stage wired into the Tracker;
 // the landmark refiner's geometry and its refine stage.
 
@@ -8,7 +9,9 @@
 #include "cnn/landmark_refiner.hpp"
 #include "cnn/refine_stage.hpp"
 #include "cnn/update_net.hpp"
+#include "core/conv_chain.hpp"
 #include "core/image.hpp"
+#include "core/onnx_net.hpp"
 #include "core/pts.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
@@ -16,6 +19,8 @@
 #include "facetrack/landmark_model.hpp"
 #include "facetrack/tracker.hpp"
 #include "fit/face_fitter.hpp"
+#include "gaze/eye_model_data.hpp"
+#include "gaze/eye_patch.hpp"
 #include "landmarks/lbf.hpp"
 #include "test_support.hpp"
 
@@ -56,6 +61,102 @@ TEST(CnnExport, OpenCvDnnMatchesTorchOnStoredInputs) {
     double worst = 0.0;
     for (std::size_t i = 0; i < expected.size(); ++i) worst = std::max(worst, std::abs(double(out.ptr<float>()[i]) - expected[i]));
     EXPECT_LT(worst, 1e-4);
+}
+
+using core::OnnxNet;
+
+/// Runs `net` on `input` (its N x C x H x W values).
+std::vector<float> run(OnnxNet& net, const std::vector<float>& input, int outputs) {
+    std::copy(input.begin(), input.end(), net.input().ptr<float>());
+    const float* out = net.forward();
+    return std::vector<float>(out, out + outputs);
+}
+
+TEST(ConvChain, TheOwnKernelsMatchTorchOnStoredInputs) {
+    const std::vector<float> input = readFloats(test::sourceDir() + "/tests/data/cnn_parity_input.f32");
+    const std::vector<float> expected = readFloats(test::sourceDir() + "/tests/data/cnn_parity_output.f32");
+    const int outputs = static_cast<int>(expected.size());
+    OnnxNet net(test::fixtureBytes("cnn_parity.onnx"), {3, 1, 64, 64}, outputs, "the parity net", OnnxNet::Engine::Own);
+    ASSERT_EQ(net.engine(), OnnxNet::Engine::Own);
+    const std::vector<float> out = run(net, input, outputs);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < expected.size(); ++i) worst = std::max(worst, std::abs(double(out[i]) - expected[i]));
+    EXPECT_LT(worst, 1e-4);
+}
+
+/// A net of the project and the input shape it runs on.
+struct NamedNet {
+    std::string name, onnx;
+    std::array<int, 4> shape;
+    int outputs;
+};
+
+/// The fixtures of the CNN path, and the shipped refiners' and iris net's nets where models/ has them.
+std::vector<NamedNet> projectNets() {
+    std::vector<NamedNet> nets = {
+        {"cnn_parity.onnx", test::fixtureBytes("cnn_parity.onnx"), {3, 1, 64, 64}, 3 * 7},
+        {"cnn_landmarks_fixture.onnx", test::fixtureBytes("cnn_landmarks_fixture.onnx"), {1, 1, 64, 64}, 136},
+        {"refiner_fixture.onnx", test::fixtureBytes("refiner_fixture.onnx"), {1, 1, 32, 32}, 136},
+        {"side_fixture.onnx", test::fixtureBytes("side_fixture.onnx"), {2, 1, 32, 32}, 2 * 22},
+        {"iris_net_fixture.onnx", test::fixtureBytes("iris_net_fixture.onnx"), {2, 1, 28, 40}, 2 * 3 * 14 * 20},
+    };
+    if (std::filesystem::exists(CnnModel::defaultPath())) {
+        const std::shared_ptr<const CnnModel> model = CnnModel::load(CnnModel::defaultPath());
+        const cnn::CnnModelData& d = model->data();
+        const int size = cnn::makeRefinerLayout(d).size;
+        nets.push_back({"the shipped landmark refiner", d.refiner_net, {1, 1, size, size}, 136});
+        if (!d.side_net.empty()) {
+            const int side = cnn::makeSideLayout(d).size;
+            nets.push_back({"the shipped brow and eye refiner", d.side_net, {2, 1, side, side}, 2 * 22});
+        }
+    }
+    const std::string eyes = test::sourceDir() + "/models/eye_model.ftm";
+    if (std::filesystem::exists(eyes)) {
+        const gaze::EyeModelData m = gaze::readEyeModel(eyes);
+        if (!m.iris_net.empty())
+            nets.push_back({"the shipped iris net", m.iris_net, {2, 1, gaze::kPatchHeight, gaze::kPatchWidth},
+                            2 * gaze::kPixelClasses * gaze::kIrisNetRows * gaze::kIrisNetColumns});
+    }
+    return nets;
+}
+
+// The load-time check compares the engines on one input; here they meet on others: standardised
+// patches, and inputs ten times larger.
+TEST(ConvChain, RunsEveryNetOfTheProjectAsOpenCvsDnnDoes) {
+    cv::RNG rng(7);
+    for (const NamedNet& n : projectNets()) {
+        SCOPED_TRACE(n.name);
+        OnnxNet own(n.onnx, n.shape, n.outputs, n.name, OnnxNet::Engine::Own);
+        OnnxNet dnn(n.onnx, n.shape, n.outputs, n.name, OnnxNet::Engine::OpenCvDnn);
+        ASSERT_EQ(own.engine(), OnnxNet::Engine::Own);
+        ASSERT_EQ(dnn.engine(), OnnxNet::Engine::OpenCvDnn);
+        for (const double sigma : {1.0, 10.0}) {
+            std::vector<float> input(static_cast<std::size_t>(n.shape[0] * n.shape[1] * n.shape[2] * n.shape[3]));
+            for (float& v : input) v = static_cast<float>(rng.gaussian(sigma));
+            const std::vector<float> expected = run(dnn, input, n.outputs);
+            const std::vector<float> out = run(own, input, n.outputs);
+            double worst = 0.0, scale = 1.0;
+            for (std::size_t i = 0; i < out.size(); ++i) {
+                scale = std::max(scale, std::abs(double(expected[i])));
+                worst = std::max(worst, std::abs(double(out[i]) - expected[i]));
+            }
+            EXPECT_LT(worst / scale, 1e-5) << "sigma " << sigma << ", outputs up to " << scale;
+        }
+    }
+}
+
+TEST(ConvChain, LeavesANetItDoesNotRunToOpenCvsDnn) {
+    const std::string onnx = test::fixtureBytes("pooled_fixture.onnx");
+    const cv::dnn::Net loaded = cv::dnn::readNetFromONNX(onnx.data(), onnx.size());
+    std::string whyNot;
+    EXPECT_FALSE(core::ConvChain::fromNet(loaded, {1, 1, 16, 16}, whyNot));
+    EXPECT_NE(whyNot.find("Pooling"), std::string::npos) << whyNot;
+    OnnxNet net(onnx, {1, 1, 16, 16}, 5, "the pooled fixture", OnnxNet::Engine::Own);
+    EXPECT_EQ(net.engine(), OnnxNet::Engine::OpenCvDnn);
+    const std::vector<float> out = run(net, std::vector<float>(16 * 16, 0.5f), 5);
+    for (const float v : out) EXPECT_TRUE(std::isfinite(v));
+    // A net that does not give the outputs asked for is an error whichever engine would run it.
+    EXPECT_THROW(OnnxNet(test::fixtureBytes("refiner_fixture.onnx"), {1, 1, 32, 32}, 137, "a refiner", OnnxNet::Engine::Own), Error);
 }
 
 /// A cascade of the parity fixture's net (random weights; 6 pose + 1 expression outputs): for

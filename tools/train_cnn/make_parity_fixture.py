@@ -8,7 +8,8 @@ no pose change and +0.3 on its one expression (cnn_expression_fixture.onnx, for 
 cascade); a landmark refiner of train_refine.py's layers on a 32 px patch whose 136 offsets are
 constant, every point (+3, 0) patch pixels from the mean shape (refiner_fixture.onnx, for the
 refine stage's geometry); the same for the brow and eye refiner of train_region.py, 22 offsets, every
-point (+3, 0) (side_fixture.onnx); and the gaze stage's iris-net fixture (iris_net_fixture.onnx, below).
+point (+3, 0) (side_fixture.onnx); the gaze stage's iris-net fixture (iris_net_fixture.onnx, below); and a net with a max-pool,
+which the own kernels leave to OpenCV's dnn (pooled_fixture.onnx).
 
   /usr/bin/python3 tools/train_cnn/make_parity_fixture.py tests/data
 """
@@ -93,3 +94,11 @@ with torch.no_grad():
 torch.onnx.export(iris.eval(), torch.zeros(1, 1, 28, 40), os.path.join(out, "iris_net_fixture.onnx"), opset_version=13,
                   input_names=["patch"], output_names=["classes"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
 print(f"wrote {out}/iris_net_fixture.onnx")
+
+# A net the own kernels do not run (core/conv_chain.hpp: a max-pool between its convolution and its dense
+# layer): OnnxNet must run it with OpenCV's dnn instead (tests/test_cnn_onnx.cpp).
+pooled = torch.nn.Sequential(torch.nn.Conv2d(1, 4, 3, padding=1), torch.nn.ReLU(), torch.nn.MaxPool2d(2), torch.nn.Flatten(),
+                             torch.nn.Linear(4 * 8 * 8, 5))
+torch.onnx.export(pooled.eval(), torch.zeros(1, 1, 16, 16), os.path.join(out, "pooled_fixture.onnx"), opset_version=13,
+                  input_names=["patch"], output_names=["values"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+print(f"wrote {out}/pooled_fixture.onnx")
