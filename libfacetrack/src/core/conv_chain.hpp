@@ -1,19 +1,17 @@
 #pragma once
-// The project's small CNNs (the landmark and brow refiners, the iris net, the
-// cascade's nets) run with own kernels: a plain chain of convolutions, ReLUs,
-// fully connected layers and a softmax over channels, read off the net OpenCV's
-// dnn loaded from ONNX. On these nets a dnn call spends about as long on its
-// bookkeeping and its 1-channel first layers as on the arithmetic (docs/cnn.md,
-// "Own kernels"); the chain allocates nothing per call.
+// The project's small CNNs (the landmark and brow refiners, the cascade's nets,
+// an iris net) run with own kernels: a plain chain of convolutions, ReLUs,
+// fully connected layers and a softmax over channels, read off the net that
+// OpenCV's dnn loaded from ONNX. On the refiners they take about 0.7x of dnn's
+// time and allocate nothing per call (docs/cnn.md, "Session 31").
 //
 // A convolution with stride s, dilation d and padding (p_y, p_x) computes
-//   out(y, x, o) = b_o + sum_{dy, dx, i} W(o, i, dy, dx) in(s y + d dy - p_y, s
-//   x + d dx - p_x, i)
-// (zero outside the input), blocked as 4-8 output pixels x 8-16 output
-// channels of accumulators; activations are kept height x width x channels
-// with the channels padded to a multiple of 8, each layer writing into the
-// interior of the next one's zero-bordered input. Where the CPU has AVX2 and
-// FMA the same loops are compiled for them.
+//   out(y, x, o) = b_o + sum_{dy, dx, i} W(o, i, dy, dx) in(s y + d dy - p_y, s x + d dx - p_x, i)
+// (zero outside the input), in register blocks of 4-8 output pixels x 8-16
+// output channels. Activations are kept height x width x channels, the
+// channels padded to a multiple of 8; each layer writes into the interior of
+// the next one's zero-bordered input. Where the CPU has AVX2 and FMA the same
+// loops are compiled for them.
 
 #include <opencv2/dnn.hpp>
 
