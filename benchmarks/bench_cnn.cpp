@@ -1,7 +1,7 @@
 // The cnn stage alone (warp into the 64 px patch, the net in OpenCV's dnn,
 // the update; per round) on a tracked 640x480 frame, beside the warm fit it
-// would refine, in the same run; the refine stage alone; and the refiners'
-// nets on either engine, the own kernels and OpenCV's dnn. The cascade:
+// would refine, in the same run; the refine stage alone; the refiners' nets on
+// either engine, the own kernels and OpenCV's dnn; and a refiner's patch cut. The cascade:
 // $FACETRACK_CNN_CASCADE, else the shipped models/cnn_cascade.ftm; the cnn stage
 // is skipped when it has no cascade stages (none is shipped: docs/cnn.md).
 
@@ -10,6 +10,7 @@
 #include "cnn/cnn_model_data.hpp"
 #include "cnn/cnn_stage.hpp"
 #include "cnn/landmark_refiner.hpp"
+#include "core/image.hpp"
 #include "core/onnx_net.hpp"
 #include "cnn/refine_stage.hpp"
 #include "fit/fit_stage.hpp"
@@ -17,6 +18,9 @@
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
 
 namespace facetrack::bench {
 namespace {
@@ -126,6 +130,25 @@ void BM_Net(benchmark::State& state) {
     state.SetLabel(name + (net.engine() == core::OnnxNet::Engine::Own ? ", own kernels" : ", OpenCV's dnn"));
 }
 BENCHMARK(BM_Net)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMicrosecond)->MinTime(minTime(1.0));
+
+/// The landmark refiner's 96 px patch cut from a 640x480 frame (a turned, scaled face), arg 0: by
+/// hand (core::warpAffineGray, what the stage runs), arg 1: cv::warpAffine, which gives the same bytes.
+void BM_PatchCut(benchmark::State& state) {
+    cv::Mat frame(480, 640, CV_8UC1), patch;
+    cv::randu(frame, 0, 256);
+    const double c = 1.6 * std::cos(0.3), s = 1.6 * std::sin(0.3);
+    const cv::Matx23d frameFromPatch(c, -s, 260.0, s, c, 150.0);
+    for (auto _ : state) {
+        if (state.range(0) == 0) {
+            core::warpAffineGray(frame, frameFromPatch, {96, 96}, patch);
+        } else {
+            cv::warpAffine(frame, patch, frameFromPatch, {96, 96}, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+        }
+        benchmark::DoNotOptimize(patch.data);
+    }
+    state.SetLabel(state.range(0) == 0 ? "by hand" : "cv::warpAffine");
+}
+BENCHMARK(BM_PatchCut)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(minTime(0.5));
 
 }  // namespace
 }  // namespace facetrack::bench

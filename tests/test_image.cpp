@@ -6,6 +6,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
+#include <limits>
+
 namespace facetrack::core {
 namespace {
 
@@ -49,6 +52,41 @@ TEST(Image, StridedViewWrapsWithoutCopying) {
     const cv::Mat wrapped = wrap(view);
     EXPECT_EQ(wrapped.data, roi.data);
     EXPECT_EQ(wrapped.size(), roi.size());
+}
+
+// The refiners' patches were cut by cv::warpAffine when their nets were trained and measured; the
+// by-hand warp must give the same bytes, at any scale, turn and shift, the frame's border included.
+TEST(WarpAffineGray, GivesOpenCvsWarpAffineToTheByte) {
+    cv::RNG rng(11);
+    for (const cv::Size frameSize : {cv::Size(160, 120), cv::Size(7, 5), cv::Size(1, 1), cv::Size(1, 9)}) {
+        cv::Mat frame(frameSize, CV_8UC1);
+        rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+        for (int k = 0; k < 150; ++k) {
+            const double angle = rng.uniform(0.0, 2 * CV_PI), scale = std::exp(rng.uniform(std::log(0.2), std::log(4.0)));
+            const double tx = rng.uniform(-60.0, frameSize.width + 60.0), ty = rng.uniform(-60.0, frameSize.height + 60.0);
+            const cv::Matx23d a(scale * std::cos(angle), -scale * std::sin(angle) * rng.uniform(0.8, 1.2), tx,  //
+                                scale * std::sin(angle), scale * std::cos(angle), ty);
+            const cv::Size size = k % 3 == 0 ? cv::Size(96, 96) : k % 3 == 1 ? cv::Size(40, 28) : cv::Size(1, 1);
+            cv::Mat expected, patch;
+            cv::warpAffine(frame, expected, a, size, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+            warpAffineGray(frame, a, size, patch);
+            ASSERT_EQ(patch.size(), size);
+            ASSERT_EQ(cv::norm(patch, expected, cv::NORM_INF), 0.0) << "frame " << frameSize << ", map " << a << ", patch " << size;
+        }
+    }
+    // The patch's buffer is reused; bad frames and sizes are errors.
+    cv::Mat frame(20, 30, CV_8UC1, cv::Scalar(9)), patch(8, 8, CV_8UC1);
+    const uchar* buffer = patch.data;
+    warpAffineGray(frame, cv::Matx23d(1, 0, 2, 0, 1, 3), {8, 8}, patch);
+    EXPECT_EQ(patch.data, buffer);
+    EXPECT_EQ(cv::countNonZero(patch != 9), 0);
+    EXPECT_THROW(warpAffineGray(cv::Mat(), cv::Matx23d(1, 0, 0, 0, 1, 0), {8, 8}, patch), Error);
+    EXPECT_THROW(warpAffineGray(cv::Mat(4, 4, CV_8UC3), cv::Matx23d(1, 0, 0, 0, 1, 0), {8, 8}, patch), Error);
+    EXPECT_THROW(warpAffineGray(frame, cv::Matx23d(1, 0, 0, 0, 1, 0), {0, 8}, patch), Error);
+    // A map that is not finite gives a patch of the frame's pixels, not a crash.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    warpAffineGray(frame, cv::Matx23d(nan, 0, 0, 0, 1, nan), {8, 8}, patch);
+    EXPECT_EQ(cv::countNonZero(patch != 9), 0);
 }
 
 }  // namespace

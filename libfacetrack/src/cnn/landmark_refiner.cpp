@@ -1,9 +1,9 @@
 #include "cnn/landmark_refiner.hpp"
 
 #include "cnn/patch_net.hpp"
+#include "core/image.hpp"
 #include "facetrack/error.hpp"
 
-#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -38,7 +38,7 @@ core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shap
 void warpAligned(const RefinerLayout& layout, const cv::Mat& gray, const core::Similarity& toFrame, cv::Mat& patch) {
     const Eigen::Matrix2f a = toFrame.linear();
     const cv::Matx23d frameOf(a(0, 0), a(0, 1), toFrame.translation.x(), a(1, 0), a(1, 1), toFrame.translation.y());
-    cv::warpAffine(gray, patch, frameOf, cv::Size(layout.size, layout.size), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+    core::warpAffineGray(gray, frameOf, cv::Size(layout.size, layout.size), patch);
 }
 
 landmarks::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d) {
@@ -84,7 +84,7 @@ cv::Matx23d sidePatchToFrame(const SideLayout& layout, const SideShape& side, bo
 }
 
 void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& toFrame, cv::Mat& patch) {
-    cv::warpAffine(gray, patch, toFrame, cv::Size(layout.size, layout.size), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+    core::warpAffineGray(gray, toFrame, cv::Size(layout.size, layout.size), patch);
 }
 
 void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored, landmarks::Shape68& shape) {

@@ -4,6 +4,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <array>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -69,5 +72,56 @@ ImageView viewOf(const cv::Mat& mat) {
                      mat.channels() == 1 ? PixelFormat::Gray8 : PixelFormat::Bgr8};
 }
 
+void warpAffineGray(const cv::Mat& gray, const cv::Matx23d& a, cv::Size size, cv::Mat& patch) {
+    if (gray.empty() || gray.type() != CV_8UC1) throw Error("warpAffineGray: the frame must be 8-bit grey and not empty");
+    if (size.width <= 0 || size.height <= 0) throw Error("warpAffineGray: the patch must have a positive size");
+    patch.create(size, CV_8UC1);
+    // OpenCV's fixed point (imgproc/src/imgwarp.cpp): the map in 1/1024 px, each sample point rounded
+    // to 1/32 px. Its 32-bit sums wrap where they overflow; so do these (unsigned, without undefined behaviour).
+    constexpr int kMapBits = 10, kFractionBits = 5, kFractions = 1 << kFractionBits;
+    constexpr double kMapScale = 1 << kMapBits;
+    constexpr unsigned kRound = (1u << kMapBits) / kFractions / 2;
+    const unsigned lastColumn = static_cast<unsigned>(std::max(gray.cols - 1, 0));
+    const unsigned lastRow = static_cast<unsigned>(std::max(gray.rows - 1, 0));
+    const std::uint8_t* pixels = gray.data;
+    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(gray.step[0]);
+    // Up to kChunk columns at a time: each column's step from the row's start, as OpenCV computes it,
+    // then each pixel's sample point in 32nds of a pixel.
+    constexpr int kChunk = 256;
+    std::array<unsigned, kChunk> columnX, columnY;
+    std::array<int, kChunk> pointX, pointY;
+    for (int first = 0; first < size.width; first += kChunk) {
+        const int columns = std::min(kChunk, size.width - first);
+        for (int k = 0; k < columns; ++k) {
+            columnX[static_cast<std::size_t>(k)] = static_cast<unsigned>(cv::saturate_cast<int>(a(0, 0) * (first + k) * kMapScale));
+            columnY[static_cast<std::size_t>(k)] = static_cast<unsigned>(cv::saturate_cast<int>(a(1, 0) * (first + k) * kMapScale));
+        }
+        for (int v = 0; v < size.height; ++v) {
+            const unsigned x0 = static_cast<unsigned>(cv::saturate_cast<int>((a(0, 1) * v + a(0, 2)) * kMapScale)) + kRound;
+            const unsigned y0 = static_cast<unsigned>(cv::saturate_cast<int>((a(1, 1) * v + a(1, 2)) * kMapScale)) + kRound;
+            for (int k = 0; k < columns; ++k) {
+                pointX[static_cast<std::size_t>(k)] = static_cast<int>(x0 + columnX[static_cast<std::size_t>(k)]) >> (kMapBits - kFractionBits);
+                pointY[static_cast<std::size_t>(k)] = static_cast<int>(y0 + columnY[static_cast<std::size_t>(k)]) >> (kMapBits - kFractionBits);
+            }
+            std::uint8_t* out = patch.ptr<std::uint8_t>(v) + first;
+            for (int k = 0; k < columns; ++k) {
+                const int x = pointX[static_cast<std::size_t>(k)], y = pointY[static_cast<std::size_t>(k)];
+                int c0 = cv::saturate_cast<short>(x >> kFractionBits), r0 = cv::saturate_cast<short>(y >> kFractionBits);
+                const int fx = x & (kFractions - 1), fy = y & (kFractions - 1);
+                int c1 = c0 + 1, r1 = r0 + 1;
+                if (static_cast<unsigned>(c0) >= lastColumn || static_cast<unsigned>(r0) >= lastRow) {  // a neighbour outside
+                    c0 = std::clamp(c0, 0, gray.cols - 1), c1 = std::clamp(c1, 0, gray.cols - 1);
+                    r0 = std::clamp(r0, 0, gray.rows - 1), r1 = std::clamp(r1, 0, gray.rows - 1);
+                }
+                const std::uint8_t* top = pixels + static_cast<std::ptrdiff_t>(r0) * step;
+                const std::uint8_t* bottom = pixels + static_cast<std::ptrdiff_t>(r1) * step;
+                // (32 - fy) ((32 - fx) p00 + fx p01) + fy ((32 - fx) p10 + fx p11), with fewer products.
+                const int upper = kFractions * top[c0] + fx * (top[c1] - top[c0]);
+                const int lower = kFractions * bottom[c0] + fx * (bottom[c1] - bottom[c0]);
+                out[k] = static_cast<std::uint8_t>((kFractions * upper + fy * (lower - upper) + 512) >> 10);
+            }
+        }
+    }
+}
 }  // namespace core
 }  // namespace facetrack
