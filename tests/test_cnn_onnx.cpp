@@ -762,6 +762,7 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
         return *std::find_if(stages.begin(), stages.end(), [&](const StageInfo& s) { return s.name == name; });
     };
     EXPECT_TRUE(find("refine").available) << find("refine").detail;
+    EXPECT_NE(find("refine").detail.find("nets on the own kernels"), std::string::npos) << find("refine").detail;
     EXPECT_FALSE(find("cnn").available);
     EXPECT_NE(find("cnn").detail.find("has no cascade stages"), std::string::npos) << find("cnn").detail;
 

@@ -53,7 +53,8 @@ public:
         return {"cnn", true,
                 std::string(cascade_->expressionsOnly() ? "expressions only (" + std::to_string(reported_.size()) + " beside the fit's), " : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
-                    std::to_string(layout_.anchors.expressions.size()) + " expressions" + (landmark_net_ ? ", landmark net" : "") + " (" +
+                    std::to_string(layout_.anchors.expressions.size()) + " expressions" + (landmark_net_ ? ", landmark net" : "") +
+                    "; nets on the " + nets_.front().engineName() + " (" +
                     cascade_->sourcePath() + ")"};
     }
 

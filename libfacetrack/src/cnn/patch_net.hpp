@@ -28,6 +28,8 @@ public:
 
     /// The values per patch.
     int outputCount() const { return outputs_; }
+    /// What runs the net (core::OnnxNet::engineName).
+    const char* engineName() const { return net_.engineName(); }
 
     /// The outputs for `patch` (CV_8U, patchSize x patchSize), for a net of
     /// batch 1. Not thread-safe (the net keeps its buffers): one per thread.

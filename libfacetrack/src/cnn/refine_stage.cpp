@@ -40,7 +40,8 @@ public:
         const std::string sides =
             side_net_ ? "; brows and eyes again in a " + std::to_string(side_layout_.size) + " px patch per side" : "";
         return {"refine", true, "CNN landmark refiner, " + std::to_string(layout_.size) + " px patch, mean share " +
-                                    std::to_string(layout_.share.mean()).substr(0, 4) + trust + sides + " (" + model_->sourcePath() + ")"};
+                                    std::to_string(layout_.share.mean()).substr(0, 4) + trust + sides + "; nets on the " +
+                                    net_.engineName() + " (" + model_->sourcePath() + ")"};
     }
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<RefineFaceState>(); }

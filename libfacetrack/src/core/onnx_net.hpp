@@ -35,6 +35,8 @@ public:
     static Engine defaultEngine();
     /// The engine that runs the net.
     Engine engine() const { return chain_ ? Engine::Own : Engine::OpenCvDnn; }
+    /// The engine, as the stages describe it: "own kernels" or "OpenCV's dnn".
+    const char* engineName() const { return chain_ ? "own kernels" : "OpenCV's dnn"; }
 
     /// The input blob (CV_32F, N x C x H x W), to fill before forward().
     cv::Mat& input() { return input_; }

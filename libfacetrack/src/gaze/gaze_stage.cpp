@@ -158,7 +158,8 @@ public:
 
     StageInfo info() const override {
         return {"gaze", true,
-                std::string("eye patches, ") + (iris_net_ ? "iris CNN" : "pixel forest") + ", aperture forest, binocular MAP fit (" +
+                std::string("eye patches, ") + (iris_net_ ? std::string("iris CNN on the ") + iris_net_->engineName() : "pixel forest") +
+                    ", aperture forest, binocular MAP fit (" +
                     eyes_->sourcePath() + ")"};
     }
 

@@ -26,6 +26,9 @@ public:
     void classify(const std::array<const cv::Mat*, 2>& patches, const std::array<cv::Mat*, 2>& iris,
                   const std::array<cv::Mat*, 2>& open);
 
+    /// What runs the net (core::OnnxNet::engineName).
+    const char* engineName() const { return net_.engineName(); }
+
 private:
     core::OnnxNet net_;
 };
