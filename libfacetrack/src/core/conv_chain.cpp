@@ -144,8 +144,7 @@ template <int P, int V>
     const Conv& first = L.convs.front();
     const int inPixels = L.in_h * L.in_w;
     for (int item = 0; item < L.batch; ++item) {
-        // The item's N C H W planes into the first input's interior, height x width
-        // x channels.
+        // The item's C x H x W planes into the first input's interior, height x width x channels.
         const float* planes = in + static_cast<std::size_t>(item) * L.in_channels * inPixels;
         float* a0 = L.activations[0].data();
         const int rowFloats0 = (first.in_w + first.pad_left + first.pad_right) * first.in_padded;
@@ -169,8 +168,7 @@ template <int P, int V>
         const Conv& last = L.convs.back();
         const float* maps = L.activations.back().data();
         if (L.denses.empty()) {
-            // Height x width x padded channels -> the net's C x H x W, with the
-            // softmax over C first.
+            // Height x width x padded channels -> the net's C x H x W, with the softmax over C first.
             const int pixels = last.out_h * last.out_w;
             for (int p = 0; p < pixels; ++p) {
                 const float* v = maps + p * last.out_padded;
@@ -217,8 +215,7 @@ std::optional<ConvChain> ConvChain::fromNet(const cv::dnn::Net& net, std::array<
     L.in_channels = shape[1];
     L.in_h = shape[2];
     L.in_w = shape[3];
-    // The tensor after the layers so far: channels x height x width, or `flat`
-    // values once flattened.
+    // The tensor after the layers so far: channels x height x width, or `flat` values once flattened.
     int channels = L.in_channels, height = L.in_h, width = L.in_w;
     bool flat = false, lastIsConv = false;
     std::string previous;
@@ -303,8 +300,7 @@ std::optional<ConvChain> ConvChain::fromNet(const cv::dnn::Net& net, std::array<
             std::vector<float> raw;
             if (!readFloats(w, w.total(), raw)) return fail("dense layer " + name + "'s weights are not 32-bit floats");
             if (lastIsConv) {
-                // The net flattens C x H x W; the chain keeps height x width x padded
-                // channels.
+                // The net flattens C x H x W; the chain keeps height x width x padded channels.
                 const Conv& c = L.convs.back();
                 d.inputs_padded = height * width * c.out_padded;
                 d.weights.assign(static_cast<std::size_t>(d.outputs) * d.inputs_padded, 0.0f);
@@ -363,7 +359,9 @@ void ConvChain::forward(const float* in, float* out) {
         return;
     }
 #endif
-    runChainGeneric(layers_, in, out);
+    forwardPortable(in, out);
 }
+
+void ConvChain::forwardPortable(const float* in, float* out) { runChainGeneric(layers_, in, out); }
 
 }  // namespace facetrack::core

@@ -36,6 +36,9 @@ public:
     /// out (N x outputsPerItem(), in the net's NCHW order) for `in` (N x C x H
     /// x W). Not thread-safe (the chain keeps its activations): one per thread.
     void forward(const float* in, float* out);
+    /// The same with the kernels built for any x86-64, which forward() runs
+    /// where the CPU lacks AVX2 or FMA (tests compare the two).
+    void forwardPortable(const float* in, float* out);
 
     /// A convolution of the chain, and the ReLU after it if any.
     struct Conv {

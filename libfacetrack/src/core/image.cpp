@@ -100,8 +100,9 @@ void warpAffineGray(const cv::Mat& gray, const cv::Matx23d& a, cv::Size size, cv
             const unsigned x0 = static_cast<unsigned>(cv::saturate_cast<int>((a(0, 1) * v + a(0, 2)) * kMapScale)) + kRound;
             const unsigned y0 = static_cast<unsigned>(cv::saturate_cast<int>((a(1, 1) * v + a(1, 2)) * kMapScale)) + kRound;
             for (int k = 0; k < columns; ++k) {
-                pointX[static_cast<std::size_t>(k)] = static_cast<int>(x0 + columnX[static_cast<std::size_t>(k)]) >> (kMapBits - kFractionBits);
-                pointY[static_cast<std::size_t>(k)] = static_cast<int>(y0 + columnY[static_cast<std::size_t>(k)]) >> (kMapBits - kFractionBits);
+                const auto c = static_cast<std::size_t>(k);
+                pointX[c] = static_cast<int>(x0 + columnX[c]) >> (kMapBits - kFractionBits);
+                pointY[c] = static_cast<int>(y0 + columnY[c]) >> (kMapBits - kFractionBits);
             }
             std::uint8_t* out = patch.ptr<std::uint8_t>(v) + first;
             for (int k = 0; k < columns; ++k) {
