@@ -236,6 +236,12 @@ std::optional<ConvChain> ConvChain::fromNet(const cv::dnn::Net& net, std::array<
             if (!conv || flat || conv->kernel_size.size() != 2 || conv->strides.size() != 2 || conv->dilations.size() != 2 ||
                 conv->pads_begin.size() != 2 || conv->pads_end.size() != 2 || !conv->padMode.empty() || layer->blobs.empty())
                 return fail("convolution " + name + " is not a plain 2D convolution");
+            const auto within = [](const std::vector<std::size_t>& v, std::size_t low, std::size_t high) {
+                return v[0] >= low && v[0] <= high && v[1] >= low && v[1] <= high;
+            };
+            if (!within(conv->kernel_size, 1, 64) || !within(conv->strides, 1, 64) || !within(conv->dilations, 1, 64) ||
+                !within(conv->pads_begin, 0, 1024) || !within(conv->pads_end, 0, 1024))
+                return fail("convolution " + name + " has a kernel, stride, dilation or padding the chain does not run");
             const cv::Mat& w = layer->blobs[0];
             if (w.dims != 4 || w.size[1] != channels) return fail("convolution " + name + " is grouped or does not match its input");
             Conv c;
@@ -255,9 +261,11 @@ std::optional<ConvChain> ConvChain::fromNet(const cv::dnn::Net& net, std::array<
             c.pad_right = static_cast<int>(conv->pads_end[1]);
             c.in_h = height;
             c.in_w = width;
-            c.out_h = (height + c.pad_top + c.pad_bottom - c.dilation_y * (c.kernel_h - 1) - 1) / c.stride_y + 1;
-            c.out_w = (width + c.pad_left + c.pad_right - c.dilation_x * (c.kernel_w - 1) - 1) / c.stride_x + 1;
-            if (w.size[2] != c.kernel_h || w.size[3] != c.kernel_w || c.out_h < 1 || c.out_w < 1 || c.stride_y < 1 || c.stride_x < 1)
+            const int spanY = height + c.pad_top + c.pad_bottom - c.dilation_y * (c.kernel_h - 1) - 1;  // the last output's first row
+            const int spanX = width + c.pad_left + c.pad_right - c.dilation_x * (c.kernel_w - 1) - 1;
+            c.out_h = spanY / c.stride_y + 1;
+            c.out_w = spanX / c.stride_x + 1;
+            if (w.size[2] != c.kernel_h || w.size[3] != c.kernel_w || spanY < 0 || spanX < 0)
                 return fail("convolution " + name + " does not fit its input");
             std::vector<float> raw;
             if (!readFloats(w, w.total(), raw)) return fail("convolution " + name + "'s weights are not 32-bit floats");
