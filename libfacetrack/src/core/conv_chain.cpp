@@ -261,7 +261,7 @@ std::optional<ConvChain> ConvChain::fromNet(const cv::dnn::Net& net, std::array<
             c.pad_right = static_cast<int>(conv->pads_end[1]);
             c.in_h = height;
             c.in_w = width;
-            const int spanY = height + c.pad_top + c.pad_bottom - c.dilation_y * (c.kernel_h - 1) - 1;  // the last output's first row
+            const int spanY = height + c.pad_top + c.pad_bottom - c.dilation_y * (c.kernel_h - 1) - 1;  // how far the kernel can move
             const int spanX = width + c.pad_left + c.pad_right - c.dilation_x * (c.kernel_w - 1) - 1;
             c.out_h = spanY / c.stride_y + 1;
             c.out_w = spanX / c.stride_x + 1;
