@@ -4,7 +4,6 @@
 #include "core/image.hpp"
 #include "facetrack/error.hpp"
 
-
 #include <algorithm>
 #include <cmath>
 

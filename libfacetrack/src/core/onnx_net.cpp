@@ -70,6 +70,7 @@ OnnxNet::OnnxNet(const std::string& onnx, std::array<int, 4> shape, int outputs,
         if (discrepancy <= kTolerance) {
             chain_ = std::move(chain);
             chain_output_.assign(static_cast<std::size_t>(outputs), 0.0f);
+            net_ = cv::dnn::Net();  // its weights and buffers are not needed again
             return;
         }
         whyNot = "its outputs differ from dnn's by " + std::to_string(discrepancy) + " of their scale";

@@ -45,7 +45,7 @@ public:
     const float* forward();
 
 private:
-    cv::dnn::Net net_;
+    cv::dnn::Net net_;  ///< runs the net when the own kernels do not; emptied when they do
     std::optional<ConvChain> chain_;
     cv::Mat input_;
     std::vector<cv::Mat> outputs_;
