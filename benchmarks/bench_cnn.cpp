@@ -1,5 +1,5 @@
-// The cnn stage alone (warp into the 64 px patch, the net in OpenCV's dnn,
-// the update; per round) on a tracked 640x480 frame, beside the warm fit it
+// The cnn stage alone (warp into the 64 px patch, the net, the update; per
+// round) on a tracked 640x480 frame, beside the warm fit it
 // would refine, in the same run; the refine stage alone; the refiners' nets on
 // either engine, the own kernels and OpenCV's dnn; and a refiner's patch cut. The cascade:
 // $FACETRACK_CNN_CASCADE, else the shipped models/cnn_cascade.ftm; the cnn stage

@@ -1,13 +1,14 @@
 #pragma once
-// A CNN of the cascade (thesis 4.4) on the face patch (face_warp.hpp), run
-// with OpenCV's dnn: the stages' updates (update_net.hpp) and the landmark
-// displacements (landmark_net.hpp). Trained by tools/train_cnn/train_stage.py
-// (docs/cnn.md).
+// A CNN on a square grey patch, run by core::OnnxNet (the own kernels, or
+// OpenCV's dnn): the cascade's stages' updates (update_net.hpp) and landmark
+// displacements (landmark_net.hpp) on the face patch (face_warp.hpp), and the
+// landmark and brow refiners (landmark_refiner.hpp). Trained by
+// tools/train_cnn/train_stage.py and tools/train_refine (docs/cnn.md).
 //
 // The net's input is the patch standardised per patch, (I - mean) / sigma
 // (population sigma, I in [0, 1]), as the training script does. A net may
 // read a batch of patches in one call (the brow and eye refiner's two sides):
-// one call of OpenCV's dnn costs about as much as a small net's arithmetic.
+// one call costs less than two.
 
 #include "core/onnx_net.hpp"
 
