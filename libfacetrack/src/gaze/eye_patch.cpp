@@ -47,35 +47,53 @@ bool cutEyePatch(const cv::Mat& gray, Point2 outer, Point2 inner, bool mirror, E
             inside = inside && sx >= 1.f && sy >= 1.f && sx < static_cast<float>(w - 3) && sy < static_cast<float>(h - 3);
         }
     }
+    const float a00 = back_map(0, 0), a01 = back_map(0, 1), a02 = back_map(0, 2);
+    const float a10 = back_map(1, 0), a11 = back_map(1, 1), a12 = back_map(1, 2);
     double sum = 0.0, sumSquares = 0.0;
     for (int y = 0; y < kPatchHeight; ++y) {
         float* row = out.pixels.ptr<float>(y);
         for (int x = 0; x < kPatchWidth; ++x) {
-            const float sx = back_map(0, 0) * x + back_map(0, 1) * y + back_map(0, 2);
-            const float sy = back_map(1, 0) * x + back_map(1, 1) * y + back_map(1, 2);
+            const float sx = a00 * static_cast<float>(x) + a01 * static_cast<float>(y) + a02;
+            const float sy = a10 * static_cast<float>(x) + a11 * static_cast<float>(y) + a12;
             // Inside, the floor is the truncation and the neighbours are in the frame.
             int x0, y0, x1, y1;
+            float ax, ay;
             if (inside) {
                 x0 = static_cast<int>(sx), y0 = static_cast<int>(sy), x1 = x0 + 1, y1 = y0 + 1;
+                ax = sx - static_cast<float>(x0), ay = sy - static_cast<float>(y0);
             } else {
-                const int fx = static_cast<int>(std::floor(sx)), fy = static_cast<int>(std::floor(sy));
+                const float floorX = std::floor(sx), floorY = std::floor(sy);
+                const int fx = static_cast<int>(floorX), fy = static_cast<int>(floorY);
                 x0 = std::clamp(fx, 0, w - 1), x1 = std::clamp(fx + 1, 0, w - 1);
                 y0 = std::clamp(fy, 0, h - 1), y1 = std::clamp(fy + 1, 0, h - 1);
+                ax = sx - floorX, ay = sy - floorY;
             }
-            const float ax = sx - std::floor(sx), ay = sy - std::floor(sy);
             const std::uint8_t* r0 = gray.ptr<std::uint8_t>(y0);
             const std::uint8_t* r1 = gray.ptr<std::uint8_t>(y1);
-            const float v = (1.f - ay) * ((1.f - ax) * r0[x0] + ax * r0[x1]) + ay * ((1.f - ax) * r1[x0] + ax * r1[x1]);
-            row[x] = v;
-            sum += v;
-            sumSquares += static_cast<double>(v) * v;
+            row[x] = (1.f - ay) * ((1.f - ax) * r0[x0] + ax * r0[x1]) + ay * ((1.f - ax) * r1[x0] + ax * r1[x1]);
         }
+        // A row's sums in float are exact enough (40 values <= 255); across rows in double. Four
+        // partial sums each: one chain of dependent additions per pixel was a third of the cut's time.
+        float rowSum[4] = {0.f, 0.f, 0.f, 0.f}, rowSquares[4] = {0.f, 0.f, 0.f, 0.f};
+        for (int x = 0; x < kPatchWidth; x += 4) {
+            for (int k = 0; k < 4; ++k) {
+                rowSum[k] += row[x + k];
+                rowSquares[k] += row[x + k] * row[x + k];
+            }
+        }
+        sum += static_cast<double>((rowSum[0] + rowSum[1]) + (rowSum[2] + rowSum[3]));
+        sumSquares += static_cast<double>((rowSquares[0] + rowSquares[1]) + (rowSquares[2] + rowSquares[3]));
     }
+    static_assert(kPatchWidth % 4 == 0, "a row's sums run in fours");
     const double count = static_cast<double>(kPatchWidth * kPatchHeight);
     const double mean = sum / count;
     // A flat patch (a covered eye) keeps a floor on the deviation: noise is not amplified into texture.
     const double deviation = std::max(std::sqrt(std::max(0.0, sumSquares / count - mean * mean)), 4.0);
-    out.pixels.convertTo(out.pixels, CV_32F, 1.0 / deviation, -mean / deviation);
+    const float scale = static_cast<float>(1.0 / deviation), offset = static_cast<float>(-mean / deviation);
+    for (int y = 0; y < kPatchHeight; ++y) {
+        float* row = out.pixels.ptr<float>(y);
+        for (int x = 0; x < kPatchWidth; ++x) row[x] = row[x] * scale + offset;
+    }
     return true;
 }
 
