@@ -195,36 +195,50 @@ void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const Soft
     float* q = r + kDataResiduals;
     float* qYaw = jYaw + kDataResiduals;
     float* qPitch = jPitch + kDataResiduals;
-    Eigen::Matrix4f normal = Eigen::Matrix4f::Zero();
-    Eigen::Vector4f moment = Eigen::Vector4f::Zero();
-    const auto basis = [](float d, int x, int y) {
-        const float out = 1.f - d;
-        return Eigen::Vector4f(d, out, out * static_cast<float>(x - kPixelsW / 2) / kPixelsW,
-                               out * static_cast<float>(y - kPixelsH / 2) / kPixelsH);
-    };
+    // The basis at a pixel: f = (D, 1 - D, (1 - D) X, (1 - D) Y), X and Y the pixel's column and
+    // row about the region's centre over its size. Summed in scalars: f f^T has 10 distinct entries.
+    const auto across = [](int x) { return static_cast<float>(x - kPixelsW / 2) / kPixelsW; };
+    const auto down = [](int y) { return static_cast<float>(y - kPixelsH / 2) / kPixelsH; };
+    std::array<float, kPixelsW> columnX;
+    for (int x = window.x0; x < window.x1; ++x) columnX[static_cast<std::size_t>(x)] = across(x);
+    float nDD = 0.f, nDO = 0.f, nDX = 0.f, nDY = 0.f, nOO = 0.f, nOX = 0.f, nOY = 0.f, nXX = 0.f, nXY = 0.f, nYY = 0.f;
+    float mD = 0.f, mO = 0.f, mX = 0.f, mY = 0.f;
     const int n = window.x1 - window.x0;
     for (int y = window.y0; y < window.y1; ++y) {
         const int k0 = y * kPixelsW + window.x0;
         disc.row(static_cast<float>(kClassifiedRegion.x0 + window.x0), static_cast<float>(kClassifiedRegion.y0 + y), n, 1, q + k0,
                  qYaw + k0, qPitch + k0);
+        const float rowY = down(y);
         for (int x = window.x0; x < window.x1; ++x) {
             const int k = y * kPixelsW + x;
             const float o = pixels.open[static_cast<std::size_t>(k)];
             if (o < 0.02f) continue;  // the lids: no weight
-            const Eigen::Vector4f f = basis(q[k], x, y);
-            normal.noalias() += (o * o) * f * f.transpose();
-            moment.noalias() += (o * o * pixels.intensity[static_cast<std::size_t>(k)]) * f;
+            const float w = o * o, d = q[k], out = 1.f - d;
+            const float fX = out * columnX[static_cast<std::size_t>(x)], fY = out * rowY;
+            const float wd = w * d, wo = w * out, wX = w * fX, wY = w * fY;
+            nDD += wd * d, nDO += wd * out, nDX += wd * fX, nDY += wd * fY;
+            nOO += wo * out, nOX += wo * fX, nOY += wo * fY;
+            nXX += wX * fX, nXY += wX * fY, nYY += wY * fY;
+            const float intensity = pixels.intensity[static_cast<std::size_t>(k)];
+            mD += wd * intensity, mO += wo * intensity, mX += wX * intensity, mY += wY * intensity;
         }
     }
+    Eigen::Matrix4f normal;
+    normal << nDD, nDO, nDX, nDY,  //
+        nDO, nOO, nOX, nOY,        //
+        nDX, nOX, nXX, nXY,        //
+        nDY, nOY, nXY, nYY;
+    const Eigen::Vector4f moment(mD, mO, mX, mY);
     const Eigen::Vector4f tones = (normal + 1e-3f * Eigen::Matrix4f::Identity()).ldlt().solve(moment);
     for (int y = window.y0; y < window.y1; ++y) {
+        // m = mu D + (1 - D) plane: dm/dD = mu - plane.
+        const float rowPlane = tones[1] + tones[3] * down(y);
         for (int x = window.x0; x < window.x1; ++x) {
             const int k = y * kPixelsW + x;
             const float o = pixels.open[static_cast<std::size_t>(k)];
-            // m = mu D + (1 - D) plane: dm/dD = mu - plane.
-            const float sclera = basis(0.f, x, y).dot(tones);
+            const float sclera = rowPlane + tones[2] * columnX[static_cast<std::size_t>(x)];
             const float contrast = tones[0] - sclera;
-            q[k] = pixelScale * o * (pixels.intensity[static_cast<std::size_t>(k)] - basis(q[k], x, y).dot(tones));
+            q[k] = pixelScale * o * (pixels.intensity[static_cast<std::size_t>(k)] - (sclera + q[k] * contrast));
             qYaw[k] *= -pixelScale * o * contrast;
             qPitch[k] *= -pixelScale * o * contrast;
         }
@@ -355,8 +369,29 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
                          J.col(2 * e).data() + row, J.col(2 * e + 1).data() + row);
         }
         priorResiduals(a, previous, havePrevious, s, r.data() + 2 * kEyeResiduals);
-        const Eigen::Matrix4f H = J.transpose() * J + 1e-4f * Eigen::Matrix4f::Identity();
-        const Eigen::Vector4f step = -H.ldlt().solve(J.transpose() * r);
+        // J^T J and J^T r by blocks: an eye's rows have only its own two columns.
+        Eigen::Matrix4f H = J.bottomRows(kPriorResiduals).transpose() * J.bottomRows(kPriorResiduals) + 1e-4f * Eigen::Matrix4f::Identity();
+        Eigen::Vector4f gradient = J.bottomRows(kPriorResiduals).transpose() * r.tail(kPriorResiduals);
+        for (int e = 0; e < 2; ++e) {
+            const float* residual = r.data() + e * kEyeResiduals;
+            const float* yaw = J.col(2 * e).data() + e * kEyeResiduals;
+            const float* pitch = J.col(2 * e + 1).data() + e * kEyeResiduals;
+            // Eight partial sums of each (vectorised; one chain of additions would be latency-bound).
+            std::array<float, 8> yy{}, yp{}, pp{}, yr{}, pr{};
+            const auto add = [&](int k, std::size_t lane) {
+                yy[lane] += yaw[k] * yaw[k], yp[lane] += yaw[k] * pitch[k], pp[lane] += pitch[k] * pitch[k];
+                yr[lane] += yaw[k] * residual[k], pr[lane] += pitch[k] * residual[k];
+            };
+            constexpr int kWhole = kEyeResiduals / 8 * 8;
+            for (int k = 0; k < kWhole; k += 8)
+                for (std::size_t lane = 0; lane < 8; ++lane) add(k + static_cast<int>(lane), lane);
+            for (int k = kWhole; k < kEyeResiduals; ++k) add(k, static_cast<std::size_t>(k - kWhole));
+            const auto total = [](const std::array<float, 8>& a) { return ((a[0] + a[4]) + (a[1] + a[5])) + ((a[2] + a[6]) + (a[3] + a[7])); };
+            H(2 * e, 2 * e) += total(yy), H(2 * e, 2 * e + 1) += total(yp), H(2 * e + 1, 2 * e) += total(yp);
+            H(2 * e + 1, 2 * e + 1) += total(pp);
+            gradient(2 * e) += total(yr), gradient(2 * e + 1) += total(pr);
+        }
+        const Eigen::Vector4f step = -H.ldlt().solve(gradient);
         if (!step.allFinite()) break;
         // At most 10 degrees a step: the soft disc is only locally quadratic.
         const float largest = step.cwiseAbs().maxCoeff();
