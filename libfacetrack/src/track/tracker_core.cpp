@@ -309,8 +309,10 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
                 runStages(input, t);
                 seen = !t.lost && appearanceOf(gray_, t.box, appearance_);
             }
-            // The next frame compares with this one (a swap: both buffers keep their memory).
-            if (seen) t.appearance.swap(appearance_);
+            // The next frame compares with this one. Copied, not swapped: a track whose buffer has
+            // no memory yet would leave appearance_ without any, and the next frame would allocate
+            // (256 floats; the copy reuses t.appearance's memory once it has some).
+            if (seen) t.appearance.assign(appearance_.begin(), appearance_.end());
             else t.appearance.clear();
         }
         dropLost();
