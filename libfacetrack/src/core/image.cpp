@@ -107,8 +107,9 @@ __attribute__((target("avx2"))) int blendRowAvx2(const std::uint8_t* pixels, std
         const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pointX + k));
         const __m256i y = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pointY + k));
         const __m256i column = _mm256_srai_epi32(x, kFractionBits), row = _mm256_srai_epi32(y, kFractionBits);
-        const __m256i outside = _mm256_or_si256(_mm256_or_si256(_mm256_cmpgt_epi32(zero, column), _mm256_cmpgt_epi32(column, lastSafeColumn)),
-                                                _mm256_or_si256(_mm256_cmpgt_epi32(zero, row), _mm256_cmpgt_epi32(row, lastSafeRow)));
+        const __m256i columnOutside = _mm256_or_si256(_mm256_cmpgt_epi32(zero, column), _mm256_cmpgt_epi32(column, lastSafeColumn));
+        const __m256i rowOutside = _mm256_or_si256(_mm256_cmpgt_epi32(zero, row), _mm256_cmpgt_epi32(row, lastSafeRow));
+        const __m256i outside = _mm256_or_si256(columnOutside, rowOutside);
         if (!_mm256_testz_si256(outside, outside)) break;
         const __m256i offset = _mm256_add_epi32(_mm256_mullo_epi32(row, rowStep), column);
         const __m256i top = _mm256_i32gather_epi32(reinterpret_cast<const int*>(pixels), offset, 1);
@@ -118,10 +119,9 @@ __attribute__((target("avx2"))) int blendRowAvx2(const std::uint8_t* pixels, std
         const __m256i fx = _mm256_and_si256(x, fractionMask), fy = _mm256_and_si256(y, fractionMask);
         const __m256i upper = _mm256_add_epi32(_mm256_slli_epi32(p00, kFractionBits), _mm256_mullo_epi32(fx, _mm256_sub_epi32(p01, p00)));
         const __m256i lower = _mm256_add_epi32(_mm256_slli_epi32(p10, kFractionBits), _mm256_mullo_epi32(fx, _mm256_sub_epi32(p11, p10)));
-        const __m256i blended = _mm256_srai_epi32(
-            _mm256_add_epi32(_mm256_add_epi32(_mm256_slli_epi32(upper, kFractionBits), _mm256_mullo_epi32(fy, _mm256_sub_epi32(lower, upper))),
-                             half),
-            2 * kFractionBits);
+        const __m256i vertical = _mm256_mullo_epi32(fy, _mm256_sub_epi32(lower, upper));
+        const __m256i sum = _mm256_add_epi32(_mm256_slli_epi32(upper, kFractionBits), vertical);
+        const __m256i blended = _mm256_srai_epi32(_mm256_add_epi32(sum, half), 2 * kFractionBits);
         const __m128i words = _mm_packus_epi32(_mm256_castsi256_si128(blended), _mm256_extracti128_si256(blended, 1));
         _mm_storel_epi64(reinterpret_cast<__m128i*>(out + k), _mm_packus_epi16(words, words));
     }

@@ -25,10 +25,11 @@ __attribute__((target("avx2"))) void sampleRowAvx2(const cv::Mat& gray, const cv
     const int* pixels = reinterpret_cast<const int*>(gray.data);
     for (int x = 0; x < kPatchWidth; x += 8) {
         const __m256 xf = _mm256_add_ps(_mm256_set1_ps(static_cast<float>(x)), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
-        const __m256 sx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(m(0, 0)), xf), _mm256_mul_ps(_mm256_set1_ps(m(0, 1)), yf)),
-                                        _mm256_set1_ps(m(0, 2)));
-        const __m256 sy = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(m(1, 0)), xf), _mm256_mul_ps(_mm256_set1_ps(m(1, 1)), yf)),
-                                        _mm256_set1_ps(m(1, 2)));
+        // (a00 x + a01 y) + a02, as the scalar loop rounds it.
+        const __m256 sx = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(m(0, 0)), xf), _mm256_mul_ps(_mm256_set1_ps(m(0, 1)), yf)), _mm256_set1_ps(m(0, 2)));
+        const __m256 sy = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(m(1, 0)), xf), _mm256_mul_ps(_mm256_set1_ps(m(1, 1)), yf)), _mm256_set1_ps(m(1, 2)));
         const __m256i x0 = _mm256_cvttps_epi32(sx), y0 = _mm256_cvttps_epi32(sy);
         const __m256 ax = _mm256_sub_ps(sx, _mm256_cvtepi32_ps(x0)), ay = _mm256_sub_ps(sy, _mm256_cvtepi32_ps(y0));
         const __m256i offset = _mm256_add_epi32(_mm256_mullo_epi32(y0, step), x0);

@@ -386,7 +386,9 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
             for (int k = 0; k < kWhole; k += 8)
                 for (std::size_t lane = 0; lane < 8; ++lane) add(k + static_cast<int>(lane), lane);
             for (int k = kWhole; k < kEyeResiduals; ++k) add(k, static_cast<std::size_t>(k - kWhole));
-            const auto total = [](const std::array<float, 8>& a) { return ((a[0] + a[4]) + (a[1] + a[5])) + ((a[2] + a[6]) + (a[3] + a[7])); };
+            const auto total = [](const std::array<float, 8>& a) {
+                return ((a[0] + a[4]) + (a[1] + a[5])) + ((a[2] + a[6]) + (a[3] + a[7]));
+            };
             H(2 * e, 2 * e) += total(yy), H(2 * e, 2 * e + 1) += total(yp), H(2 * e + 1, 2 * e) += total(yp);
             H(2 * e + 1, 2 * e + 1) += total(pp);
             gradient(2 * e) += total(yr), gradient(2 * e + 1) += total(pr);
