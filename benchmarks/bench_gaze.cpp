@@ -16,6 +16,7 @@
 #include <opencv2/videoio.hpp>
 
 #include <cstdlib>
+#include <vector>
 
 namespace facetrack::bench {
 namespace {
@@ -55,6 +56,39 @@ void BM_Gaze_BothEyes(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_Gaze_BothEyes)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
+
+/// The same stage on 16 tracked frames of d14 in turn (every fifth from frame 40). Why: on one
+/// frame repeated the stage reads about half what it costs in the tracker, most likely because the
+/// branch predictor learns every forest walk's path (docs/benchmarks.md, "Session 32").
+void BM_Gaze_BothEyesFramesInTurn(benchmark::State& state) {
+    Models models = benchModels();
+    if (!models.eyes) {
+        failBenchmark(state, "no eye model (models/eye_model.ftm is shipped)");
+        return;
+    }
+    std::vector<TrackedFrame> frames;
+    for (int index = 40; index < 40 + 16 * 5; index += 5) {
+        auto tracked = trackedFrame(state, models, "liveportrait_d14_gaze_shifts.mp4", index);
+        if (!tracked) return;
+        frames.push_back(std::move(*tracked));
+    }
+    auto stage = gaze::makeGazeStage(models.eyes, models.face, true);
+    auto faceState = stage->newFaceState();
+    std::vector<pipeline::FaceTrack> faces(frames.size());
+    std::vector<pipeline::FrameInput> inputs;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        faces[i].result = frames[i].result.faces[0];
+        inputs.push_back(frames[i].input());
+    }
+    std::size_t i = 0;
+    for (auto _ : state) {
+        stage->run(inputs[i], faces[i], faceState.get());
+        benchmark::DoNotOptimize(faces[i].result.gaze);
+        i = (i + 1) % frames.size();
+    }
+    state.SetLabel(models.eyes->data().iris_net.empty() ? "pixel forest" : "iris CNN");
+}
+BENCHMARK(BM_Gaze_BothEyesFramesInTurn)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 /// The tracking-mode frame of d14 at 640x480, gaze on (the shipped models) or off (no eye model).
 void BM_TrackingFrame640x480_d14(benchmark::State& state) {
