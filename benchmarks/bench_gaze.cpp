@@ -28,51 +28,15 @@ Models benchModels() {
     return models;
 }
 
-/// Arg 0: the pixel forest (the model's iris CNN left out); 1: the model as it is (its iris CNN when it has one).
-void BM_Gaze_BothEyes(benchmark::State& state) {
-    Models models = benchModels();
-    if (!models.eyes) {
-        failBenchmark(state, "no eye model (models/eye_model.ftm is shipped)");
-        return;
-    }
-    const auto tracked = trackedFrame(state, models, "liveportrait_d14_gaze_shifts.mp4", 40);
-    if (!tracked) return;
-    std::shared_ptr<const EyeModel> eyes = models.eyes;
-    const bool cnn = state.range(0) == 1 && !eyes->data().iris_net.empty();
-    if (state.range(0) == 0 && !eyes->data().iris_net.empty()) {
-        auto forest = std::make_shared<gaze::EyeModelData>(eyes->data());
-        forest->iris_net.clear();
-        eyes = std::make_shared<const EyeModel>(forest, eyes->sourcePath());
-    }
-    state.SetLabel(cnn ? "iris CNN" : "pixel forest");
-    auto stage = gaze::makeGazeStage(eyes, models.face, true);
-    auto faceState = stage->newFaceState();
-    pipeline::FaceTrack face;
-    face.result = tracked->result.faces[0];
-    const pipeline::FrameInput input = tracked->input();
-    for (auto _ : state) {
-        stage->run(input, face, faceState.get());
-        benchmark::DoNotOptimize(face.result.gaze);
-    }
-}
-BENCHMARK(BM_Gaze_BothEyes)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
-
-/// The same stage on 16 tracked frames of d14 in turn (every fifth from frame 40). Why: on one
-/// frame repeated the stage reads about half what it costs in the tracker, most likely because the
-/// branch predictor learns every forest walk's path (docs/benchmarks.md, "Session 32").
-void BM_Gaze_BothEyesFramesInTurn(benchmark::State& state) {
-    Models models = benchModels();
-    if (!models.eyes) {
-        failBenchmark(state, "no eye model (models/eye_model.ftm is shipped)");
-        return;
-    }
+/// The gaze stage of `eyes`, timed on tracked 640x480 frames of d14 (`indices`) in turn.
+void timeGazeStage(benchmark::State& state, const Models& models, std::shared_ptr<const EyeModel> eyes, const std::vector<int>& indices) {
     std::vector<TrackedFrame> frames;
-    for (int index = 40; index < 40 + 16 * 5; index += 5) {
+    for (const int index : indices) {
         auto tracked = trackedFrame(state, models, "liveportrait_d14_gaze_shifts.mp4", index);
         if (!tracked) return;
         frames.push_back(std::move(*tracked));
     }
-    auto stage = gaze::makeGazeStage(models.eyes, models.face, true);
+    auto stage = gaze::makeGazeStage(std::move(eyes), models.face, true);
     auto faceState = stage->newFaceState();
     std::vector<pipeline::FaceTrack> faces(frames.size());
     std::vector<pipeline::FrameInput> inputs;
@@ -86,7 +50,41 @@ void BM_Gaze_BothEyesFramesInTurn(benchmark::State& state) {
         benchmark::DoNotOptimize(faces[i].result.gaze);
         i = (i + 1) % frames.size();
     }
+}
+
+/// Both eyes of frame 40, repeated. Arg 0: the pixel forest (the model's iris CNN left out); 1: the
+/// model as it is (its iris CNN when it has one).
+void BM_Gaze_BothEyes(benchmark::State& state) {
+    const Models models = benchModels();
+    if (!models.eyes) {
+        failBenchmark(state, "no eye model (models/eye_model.ftm is shipped)");
+        return;
+    }
+    std::shared_ptr<const EyeModel> eyes = models.eyes;
+    const bool cnn = state.range(0) == 1 && !eyes->data().iris_net.empty();
+    if (state.range(0) == 0 && !eyes->data().iris_net.empty()) {
+        auto forest = std::make_shared<gaze::EyeModelData>(eyes->data());
+        forest->iris_net.clear();
+        eyes = std::make_shared<const EyeModel>(forest, eyes->sourcePath());
+    }
+    state.SetLabel(cnn ? "iris CNN" : "pixel forest");
+    timeGazeStage(state, models, eyes, {40});
+}
+BENCHMARK(BM_Gaze_BothEyes)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
+
+/// The same stage, the model as it is, on 16 frames in turn (every fifth from frame 40). Why: on one
+/// frame repeated the stage reads about half what it costs in the tracker, most likely because the
+/// branch predictor learns every forest walk's path (docs/benchmarks.md, "Session 32").
+void BM_Gaze_BothEyesFramesInTurn(benchmark::State& state) {
+    const Models models = benchModels();
+    if (!models.eyes) {
+        failBenchmark(state, "no eye model (models/eye_model.ftm is shipped)");
+        return;
+    }
     state.SetLabel(models.eyes->data().iris_net.empty() ? "pixel forest" : "iris CNN");
+    std::vector<int> indices;
+    for (int index = 40; index < 40 + 16 * 5; index += 5) indices.push_back(index);
+    timeGazeStage(state, models, models.eyes, indices);
 }
 BENCHMARK(BM_Gaze_BothEyesFramesInTurn)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 

@@ -131,6 +131,16 @@ __attribute__((target("avx2"))) int blendRowAvx2(const std::uint8_t* pixels, std
 
 }  // namespace
 
+bool gathersFit(const cv::Mat& gray) {
+#if defined(__x86_64__)
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    return avx2 && static_cast<double>(gray.step[0]) * gray.rows < static_cast<double>(std::numeric_limits<int>::max());
+#else
+    (void)gray;
+    return false;
+#endif
+}
+
 void warpAffineGray(const cv::Mat& gray, const cv::Matx23d& a, cv::Size size, cv::Mat& patch) {
     if (gray.empty() || gray.type() != CV_8UC1) throw Error("warpAffineGray: the frame must be 8-bit grey and not empty");
     if (size.width <= 0 || size.height <= 0) throw Error("warpAffineGray: the patch must have a positive size");
@@ -142,12 +152,8 @@ void warpAffineGray(const cv::Mat& gray, const cv::Matx23d& a, cv::Size size, cv
     const unsigned lastRow = static_cast<unsigned>(std::max(gray.rows - 1, 0));
     const std::uint8_t* pixels = gray.data;
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(gray.step[0]);
-#if defined(__x86_64__)
-    // The gathers' offsets are 32-bit; a column within a short needs no saturate_cast.
-    static const bool avx2 = __builtin_cpu_supports("avx2");
-    const bool gather = avx2 && gray.rows >= 2 && gray.cols >= 4 && gray.cols < std::numeric_limits<short>::max() &&
-                        static_cast<double>(step) * gray.rows < static_cast<double>(std::numeric_limits<int>::max());
-#endif
+    // A column within a short needs no saturate_cast.
+    const bool gather = gathersFit(gray) && gray.rows >= 2 && gray.cols >= 4 && gray.cols < std::numeric_limits<short>::max();
     // Up to kChunk columns at a time: each column's step from the row's start, as OpenCV computes it,
     // then each pixel's sample point in 32nds of a pixel.
     constexpr int kChunk = 256;

@@ -21,6 +21,10 @@ cv::Mat toGray(const ImageView& view, cv::Mat& buffer);
 /// A view of an 8-bit BGR or grey cv::Mat (for tools and tests).
 ImageView viewOf(const cv::Mat& mat);
 
+/// True where the CPU has AVX2 and every byte offset into `gray` fits a 32-bit lane: then the
+/// patch cuts (warpAffineGray, gaze::cutEyePatch) gather eight sample points at a time.
+bool gathersFit(const cv::Mat& gray);
+
 /// patch(u, v) = gray(A (u, v, 1)^T), bilinear, the border repeated: to the
 /// byte what cv::warpAffine(gray, patch, A, size, INTER_LINEAR |
 /// WARP_INVERSE_MAP, BORDER_REPLICATE) gives, without the scratch memory it

@@ -1,10 +1,10 @@
 #include "gaze/eye_patch.hpp"
 
+#include "core/image.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -92,13 +92,7 @@ bool cutEyePatch(const cv::Mat& gray, Point2 outer, Point2 inner, bool mirror, E
     }
     const float a00 = back_map(0, 0), a01 = back_map(0, 1), a02 = back_map(0, 2);
     const float a10 = back_map(1, 0), a11 = back_map(1, 1), a12 = back_map(1, 2);
-#if defined(__x86_64__)
-    static const bool avx2 = __builtin_cpu_supports("avx2");
-    // The gathers' offsets are 32-bit.
-    const bool gather = avx2 && inside && static_cast<double>(gray.step[0]) * h < static_cast<double>(std::numeric_limits<int>::max());
-#else
-    constexpr bool gather = false;
-#endif
+    const bool gather = inside && core::gathersFit(gray);
     double sum = 0.0, sumSquares = 0.0;
     for (int y = 0; y < kPatchHeight; ++y) {
         float* row = out.pixels.ptr<float>(y);

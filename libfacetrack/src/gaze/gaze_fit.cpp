@@ -197,10 +197,12 @@ void eyeResiduals(const EyeObservation& eye, const EyePixels& pixels, const Soft
     float* qPitch = jPitch + kDataResiduals;
     // The basis at a pixel: f = (D, 1 - D, (1 - D) X, (1 - D) Y), X and Y the pixel's column and
     // row about the region's centre over its size. Summed in scalars: f f^T has 10 distinct entries.
-    const auto across = [](int x) { return static_cast<float>(x - kPixelsW / 2) / kPixelsW; };
+    static const std::array<float, kPixelsW> columnX = [] {
+        std::array<float, kPixelsW> across{};
+        for (int x = 0; x < kPixelsW; ++x) across[static_cast<std::size_t>(x)] = static_cast<float>(x - kPixelsW / 2) / kPixelsW;
+        return across;
+    }();
     const auto down = [](int y) { return static_cast<float>(y - kPixelsH / 2) / kPixelsH; };
-    std::array<float, kPixelsW> columnX;
-    for (int x = window.x0; x < window.x1; ++x) columnX[static_cast<std::size_t>(x)] = across(x);
     float nDD = 0.f, nDO = 0.f, nDX = 0.f, nDY = 0.f, nOO = 0.f, nOX = 0.f, nOY = 0.f, nXX = 0.f, nXY = 0.f, nYY = 0.f;
     float mD = 0.f, mO = 0.f, mX = 0.f, mY = 0.f;
     const int n = window.x1 - window.x0;
