@@ -232,6 +232,8 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     EXPECT_EQ(back.open_aperture, m.open_aperture);
     EXPECT_EQ(back.closed_aperture, m.closed_aperture);
     EXPECT_EQ(back.provenance, m.provenance);
+    EXPECT_EQ(back.open_map_scale, m.open_map_scale);
+    EXPECT_EQ(back.open_map_offset, m.open_map_offset);
     ASSERT_EQ(back.corner_stages.size(), m.corner_stages.size());
     for (std::size_t k = 0; k < m.corner_stages.size(); ++k) EXPECT_EQ(back.corner_stages[k].leaves, m.corner_stages[k].leaves);
 
@@ -269,6 +271,14 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     bad = m;
     bad.pixels.splits.front() = PatchFeature{0, 0, kPixelTestReach + 1, 0};  // a pixel test reaching past the padding
     EXPECT_THROW(writeEyeModel(copy, bad), Error);
+    for (const float scale : {0.f, -1.f, std::nanf("")}) {
+        bad = m;
+        bad.open_map_scale = scale;
+        EXPECT_THROW(writeEyeModel(copy, bad), Error) << scale;
+    }
+    bad = m;
+    bad.open_map_offset = std::nanf("");
+    EXPECT_THROW(writeEyeModel(copy, bad), Error);
     std::filesystem::remove(copy);
 }
 
@@ -304,13 +314,34 @@ TEST(IrisNet, ReadsEachRegionCellFromItsOwnPatchPixel) {
     EXPECT_THROW(IrisNet(test::fixtureBytes("cnn_parity.onnx"), "the cascade's net"), Error);
 }
 
-TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneAndTwo) {
+TEST(OpenMap, ItsLidGapIsTheOpenRowsOverTheEyeWidthOnTheModelsScale) {
+    // An eye open over rows 3..7 of the classified grid: 5 cells of kClassifiedRegion.step patch pixels.
+    cv::Mat open(kClassifiedRegion.rows(), kClassifiedRegion.columns(), CV_32F, cv::Scalar(0.f));
+    open.rowRange(3, 8).setTo(1.f);
+    const float gap = 5.f * static_cast<float>(kClassifiedRegion.step) / kEyeWidth;
+    EXPECT_NEAR(openMapGap(open), gap, 1e-6f);
+    EyeModelData model;
+    EXPECT_NEAR(openMapAperture(model, open), gap, 1e-6f);  // the pixel forest's map: as read
+    model.open_map_scale = 0.65f;
+    model.open_map_offset = 0.09f;
+    EXPECT_NEAR(openMapAperture(model, open), 0.65f * gap + 0.09f, 1e-6f);
+    // Only the columns at 35, 50 and 65 % of the eye count: an open cell elsewhere changes nothing.
+    open.col(0).setTo(1.f);
+    EXPECT_NEAR(openMapGap(open), gap, 1e-6f);
+}
+
+TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneToThree) {
     FACETRACK_REQUIRE_EYE_MODEL();
     EyeModelData m = readEyeModel(test::sourceDir() + "/models/eye_model.ftm");
     m.iris_net = test::fixtureBytes("iris_net_fixture.onnx");
     const std::string path = test::tempPath("eyes_cnn.ftm");
+    m.open_map_scale = 0.65f;  // the net's open map read on the pixel forest's scale
+    m.open_map_offset = 0.09f;
     writeEyeModel(path, m);
-    EXPECT_EQ(readEyeModel(path).iris_net, m.iris_net);
+    const EyeModelData withNet = readEyeModel(path);
+    EXPECT_EQ(withNet.iris_net, m.iris_net);
+    EXPECT_EQ(withNet.open_map_scale, 0.65f);
+    EXPECT_EQ(withNet.open_map_offset, 0.09f);
     // The stage classifies with it.
     Models models = Models::loadDefault();
     models.eyes = EyeModel::load(path);
@@ -327,19 +358,22 @@ TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneAndTwo) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("iris net"), std::string::npos) << e.what();
     }
-    // Versions 2 (no corner stages) and 1 (no iris net either): the payload without its last
-    // byte (the stage count, 0) and then without the empty iris net's length.
+    // Versions 3 (no open-map scale: the forest's map as read), 2 (no corner stages) and 1 (no iris
+    // net either): the payload without its two last floats, then its last byte (the stage count,
+    // 0), then the empty iris net's length.
     EyeModelData plain = m;
     plain.iris_net.clear();
     plain.corner_stages.clear();
     writeEyeModel(path, plain);
     std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
-    for (const std::uint32_t version : {2u, 1u}) {
-        payload.resize(payload.size() - (version == 2 ? 1 : sizeof(std::uint32_t)));
+    for (const std::uint32_t version : {3u, 2u, 1u}) {
+        payload.resize(payload.size() - (version == 3 ? 2 * sizeof(float) : version == 2 ? 1 : sizeof(std::uint32_t)));
         core::writeModelFile(path, kEyeModelMagic, version, payload);
         const EyeModelData old = readEyeModel(path);
         EXPECT_TRUE(old.iris_net.empty());
         EXPECT_TRUE(old.corner_stages.empty());
+        EXPECT_EQ(old.open_map_scale, 1.f);
+        EXPECT_EQ(old.open_map_offset, 0.f);
         EXPECT_EQ(old.pixels.leaves, m.pixels.leaves);
     }
     std::filesystem::remove(path);

@@ -14,6 +14,7 @@
 #include "common/teacher.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "gaze/forest_training.hpp"
+#include "gaze/iris_net.hpp"
 
 #include "core/binary_io.hpp"
 #include "core/box.hpp"
@@ -31,6 +32,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <numeric>
 #include <random>
@@ -54,7 +56,8 @@ the face model (default 2,500; exact classes and apertures; eval-gaze renders ot
 forest too with --synthetic-pixels. Reports pixel accuracy and aperture error on held-out eyes.
 --samples-out DIR writes the eye patches instead, for the iris CNN (train_iris_net.py):
 DIR/{train,validation,heldout}_{patches,classes,info}.npy, then stops.
---iris-net puts that CNN in the model, in place of the pixel forest. The corner cascade (the eye
+--iris-net puts that CNN in the model, in place of the pixel forest, its open map's lid gap mapped
+onto the forest's scale (least squares over the training clips' eyes). The corner cascade (the eye
 corners refined from the patch, which place the eyeballs; default 4 stages) learns the 300-W
 annotators' corners of the train split and the exact corners of RENDERS other renders (default
 12,000), from patches cut near them; reported on 300-W validation and every tenth render, their
@@ -561,6 +564,69 @@ std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::p
     return cascade;
 }
 
+/// The iris net's open-map gap on the pixel forest's scale (EyeModelData::open_map_scale): the least-squares
+/// line of the forest map's gap on the net's over `eyes`, reported there and on `check`.
+void calibrateOpenMap(EyeModelData& model, const Dataset& eyes, const Dataset& check, std::ostringstream& provenance) {
+    IrisNet net(model.iris_net, "the iris net");
+    cv::Mat padded, iris(kClassifiedRegion.rows(), kClassifiedRegion.columns(), CV_32F), netIris = iris.clone();
+    cv::Mat forestOpen = iris.clone(), netOpen = iris.clone(), unused = iris.clone();
+    const auto gaps = [&](const Dataset& data) {
+        std::vector<std::pair<double, double>> out;  // (net, forest)
+        for (const EyeSample& e : data.eyes) {
+            classifyByForest(model, e.patch, padded, iris, forestOpen);
+            net.classify({&e.patch, nullptr}, {&netIris, &unused}, {&netOpen, &unused});
+            out.emplace_back(openMapGap(netOpen), openMapGap(forestOpen));
+        }
+        return out;
+    };
+    // Correlation, and the RMS difference of the forest's gap and a * net gap + b.
+    const auto report = [](const std::vector<std::pair<double, double>>& xy, double a, double b, const char* name) {
+        double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, raw = 0, mapped = 0;
+        for (const auto& [x, y] : xy) {
+            sx += x, sy += y, sxx += x * x, syy += y * y, sxy += x * y;
+            raw += (x - y) * (x - y);
+            mapped += (a * x + b - y) * (a * x + b - y);
+        }
+        const double n = static_cast<double>(xy.size());
+        const double r = (sxy / n - sx * sy / n / n) / std::sqrt((sxx / n - sx * sx / n / n) * (syy / n - sy * sy / n / n));
+        std::printf("  %s: %zu eyes, r = %.3f; RMS against the forest map's gap: %.4f as read, %.4f mapped\n", name, xy.size(), r,
+                    std::sqrt(raw / n), std::sqrt(mapped / n));
+    };
+    const auto xy = gaps(eyes);
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (const auto& [x, y] : xy) sx += x, sy += y, sxx += x * x, sxy += x * y;
+    const double n = static_cast<double>(xy.size());
+    if (xy.size() < 100) throw Error("too few eyes to calibrate the iris net's open map");
+    model.open_map_scale = static_cast<float>((sxy - sx * sy / n) / (sxx - sx * sx / n));
+    model.open_map_offset = static_cast<float>((sy - model.open_map_scale * sx) / n);
+    std::printf("open map: the net's gap x reads as the forest's %.3f x %+.3f\n", model.open_map_scale, model.open_map_offset);
+    report(xy, model.open_map_scale, model.open_map_offset, "training clips");
+    report(gaps(check), model.open_map_scale, model.open_map_offset, "held-out clips");
+    char line[160];
+    std::snprintf(line, sizeof line, "; its open map's gap read as %.3f x %+.3f (least squares onto the pixel forest map's, %zu training-clip eyes)",
+                  model.open_map_scale, model.open_map_offset, xy.size());
+    provenance << line;
+}
+
+/// The eyes of the clips in ../shared/data/clips, not jittered: those named in `holdout` into `held`, the others into `train`.
+void addClips(Dataset& train, Dataset& held, const std::vector<std::string>& holdout, std::vector<std::string>* trainNames,
+              std::mt19937* jitter, const std::function<double()>& seconds) {
+    const std::string shared = core::sharedDirectory();
+    const auto clipTeacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
+    std::vector<std::filesystem::path> clips;
+    for (const auto& entry : std::filesystem::directory_iterator(shared + "/data/clips"))
+        if (entry.path().extension() == ".mp4") clips.push_back(entry.path());
+    std::sort(clips.begin(), clips.end());
+    for (const auto& path : clips) {
+        const std::string name = path.filename().string();
+        const bool isHeld = std::find(holdout.begin(), holdout.end(), name) != holdout.end();
+        addClip(isHeld ? held : train, shared, clipTeacher, name, isHeld ? nullptr : jitter);
+        if (!isHeld && trainNames) trainNames->push_back(name);
+        std::printf("clip %s: %s, %zu / %zu eye patches so far (%.0f s)\n", name.c_str(), isHeld ? "held out" : "train", train.eyes.size(),
+                    held.eyes.size(), seconds());
+    }
+}
+
 /// `provenance` without its "; N corner stages ..." part.
 std::string withoutCornerStages(const std::string& provenance) {
     static const std::regex stages(R"(; \d+ corner stages[^;]*)");
@@ -582,9 +648,18 @@ int main(int argc, char** argv) {
         const std::string shared = core::sharedDirectory();
         if (shared.empty()) throw Error("../shared not found: the teacher labels live there");
         const std::string out = args.get("--out", "models/eye_model.ftm");
-        const auto irisNet = [&] {
+        const auto holdout = tools::splitList(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
+        const auto start = std::chrono::steady_clock::now();
+        const std::function<double()> seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+        // The iris net in place of the pixel forest, its open map calibrated on the clips' eyes.
+        const auto addIrisNet = [&](EyeModelData& model, std::ostringstream& provenance) {
             const std::string path = args.get("--iris-net", "");
-            return core::readFileBytes(path, "the iris net '" + path + "'");
+            model.iris_net = core::readFileBytes(path, "the iris net '" + path + "'");
+            provenance << "; iris CNN " << std::filesystem::path(path).filename().string()
+                       << " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
+            Dataset clips, held;
+            addClips(clips, held, holdout, nullptr, nullptr, seconds);
+            calibrateOpenMap(model, clips, held, provenance);
         };
         const unsigned seed = static_cast<unsigned>(args.integer("--seed", 1));
         // The corner cascade: 300-W train (eight jittered copies per eye) and renders (four);
@@ -624,20 +699,13 @@ int main(int argc, char** argv) {
             std::ostringstream provenance;
             // A new cascade replaces the old one, and its line in the provenance.
             provenance << (args.has("--corners") ? withoutCornerStages(model.provenance) : model.provenance);
-            if (args.has("--iris-net")) {
-                model.iris_net = irisNet();
-                provenance << "; iris CNN " << std::filesystem::path(args.get("--iris-net", "")).filename().string()
-                           << " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
-            }
+            if (args.has("--iris-net")) addIrisNet(model, provenance);
             if (args.has("--corners")) model.corner_stages = cornerCascade(provenance);
             model.provenance = provenance.str();
             writeEyeModel(out, model);
             std::printf("wrote %s (%.1f kB): %s\n", out.c_str(), std::filesystem::file_size(out) / 1024.0, model.provenance.c_str());
             return 0;
         }
-        const auto holdout = tools::splitList(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
-        const auto start = std::chrono::steady_clock::now();
-        const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
 
         std::mt19937 jitter(seed);
         Dataset train, validation, heldClips;
@@ -645,18 +713,8 @@ int main(int argc, char** argv) {
         std::printf("300-W train: %zu eye patches (%.0f s)\n", train.eyes.size(), seconds());
         addFaces300W(validation, shared, tools::Split::Validation, nullptr);
         std::printf("300-W validation: %zu eye patches (%.0f s)\n", validation.eyes.size(), seconds());
-        const auto clipTeacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
         std::vector<std::string> trainClips;
-        for (const auto& entry : std::filesystem::directory_iterator(shared + "/data/clips")) {
-            const std::string name = entry.path().filename().string();
-            if (entry.path().extension() != ".mp4") continue;
-            const bool held = std::find(holdout.begin(), holdout.end(), name) != holdout.end();
-            addClip(held ? heldClips : train, shared, clipTeacher, name, held ? nullptr : &jitter);
-            if (!held) trainClips.push_back(name);
-            std::printf("clip %s: %s, %zu / %zu eye patches so far (%.0f s)\n", name.c_str(), held ? "held out" : "train",
-                        train.eyes.size(), heldClips.eyes.size(), seconds());
-        }
-        std::sort(trainClips.begin(), trainClips.end());
+        addClips(train, heldClips, holdout, &trainClips, &jitter, seconds);
         const int synthetic = args.integer("--synthetic", 2500);
         Dataset synth;
         addSynthetic(synth, synthetic, seed + 1000, jitter);
@@ -743,11 +801,7 @@ int main(int argc, char** argv) {
         provenance << "; " << synthetic << " synthetic renders (" << (args.has("--synthetic-pixels") ? "both forests" : "aperture forest")
                    << "); patches cut with facetrack's own landmarks";
         model.corner_stages = cornerCascade(provenance);
-        if (args.has("--iris-net")) {
-            model.iris_net = irisNet();
-            provenance << "; iris CNN " << std::filesystem::path(args.get("--iris-net", "")).filename().string()
-                       << " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
-        }
+        if (args.has("--iris-net")) addIrisNet(model, provenance);
         model.provenance = provenance.str();
         writeEyeModel(out, model);
         std::printf("wrote %s (%.1f kB) in %.0f s: %s\n", out.c_str(), std::filesystem::file_size(out) / 1024.0, seconds(),

@@ -95,6 +95,19 @@ def scores(net, x, y):
     return accuracy, both / max(either, 1), error.mean().item()
 
 
+def lower_resolution(x, chosen):
+    """The `chosen` patches of `x` as a smaller face's eye shows them: scaled down by one factor
+    in 0.4-1 per batch (antialiased), then back up to the patch size, as the stage's cut upsamples."""
+    if not chosen.any():
+        return x
+    factor = 0.4 + 0.6 * torch.rand(1).item()
+    size = (max(4, round(PATCH_H * factor)), max(4, round(PATCH_W * factor)))
+    small = torch.nn.functional.interpolate(x[chosen], size=size, mode="bilinear", align_corners=False, antialias=True)
+    x = x.clone()
+    x[chosen] = torch.nn.functional.interpolate(small, size=(PATCH_H, PATCH_W), mode="bilinear", align_corners=False)
+    return x
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--samples", default="build/eye_samples", help="train_eyes --samples-out's folder")
@@ -103,6 +116,8 @@ def main():
     p.add_argument("--synthetic-share", type=float, default=0.3, help="share of renders in each batch (0: teacher only)")
     p.add_argument("--width", type=int, default=16, help="channels of the dilated layers")
     p.add_argument("--noise", type=float, default=0.15, help="largest added pixel noise (normalised units)")
+    p.add_argument("--blur", type=float, default=0.0,
+                   help="share of each batch seen at a lower resolution (down by 0.4-1, then up): small faces' eyes")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--seed", type=int, default=1)
     a = p.parse_args()
@@ -137,7 +152,10 @@ def main():
         total, seen = 0.0, 0
         for k in range(0, len(order), batch):
             i = order[k:k + batch]
-            xb = x[i] + torch.rand(len(i), 1, 1, 1) * a.noise * torch.randn(len(i), 1, PATCH_H, PATCH_W)
+            xb = x[i]
+            if a.blur > 0:
+                xb = lower_resolution(xb, torch.rand(len(i)) < a.blur)
+            xb = xb + torch.rand(len(i), 1, 1, 1) * a.noise * torch.randn(len(i), 1, PATCH_H, PATCH_W)
             loss = torch.nn.functional.cross_entropy(net(xb), y[i])
             optimiser.zero_grad()
             loss.backward()

@@ -5,6 +5,7 @@
 #include "gaze/eye_model_data.hpp"
 #include "gaze/iris_net.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string_view>
 
@@ -42,6 +43,8 @@ void validate(const EyeModelData& m, const std::string& what) {
         f.validate(what.c_str());
         if (f.outputs != 4) throw Error(what + ": corrupt: corner forest outputs");
     }
+    if (!(m.open_map_scale > 0.1f && m.open_map_scale < 10.f && std::abs(m.open_map_offset) < 1.f))
+        throw Error(what + ": corrupt: open-map scale or offset");
     if (!m.iris_net.empty()) IrisNet(m.iris_net, what + ": its iris net");  // loads and runs once, or throws
 }
 }  // namespace
@@ -57,6 +60,8 @@ void writeEyeModel(const std::string& path, const EyeModelData& m) {
     w.putString(m.iris_net);
     w.put<std::uint8_t>(static_cast<std::uint8_t>(m.corner_stages.size()));
     for (const PatchForest& f : m.corner_stages) putForest(w, f);
+    w.put(m.open_map_scale);
+    w.put(m.open_map_offset);
     core::writeModelFile(path, kEyeModelMagic, kEyeModelVersion, w.bytes());
 }
 
@@ -76,6 +81,10 @@ EyeModelData readEyeModel(const std::string& path) {
         const std::size_t stages = r.get<std::uint8_t>();
         if (stages > kMaxCornerStages) r.fail("the number of corner stages");
         for (std::size_t k = 0; k < stages; ++k) m.corner_stages.push_back(getForest(r));
+    }
+    if (version >= 4) {
+        m.open_map_scale = r.get<float>();
+        m.open_map_offset = r.get<float>();
     }
     r.expectEnd();
     validate(m, what);
@@ -99,6 +108,16 @@ std::array<Point2, 2> eyeCorners(const EyeModelData& model, const cv::Mat& gray,
         corners = refineCorners(model.corner_stages[k], *at);
     }
     return corners;
+}
+
+float openMapGap(const cv::Mat& open) {
+    float gap = 0.f;
+    for (const float share : {0.35f, 0.5f, 0.65f}) {
+        const float x = (kOuterX + share * kEyeWidth - static_cast<float>(kClassifiedRegion.x0)) / static_cast<float>(kClassifiedRegion.step);
+        const int column = std::clamp(static_cast<int>(std::lround(x)), 0, kClassifiedRegion.columns() - 1);
+        for (int row = 0; row < kClassifiedRegion.rows(); ++row) gap += open.at<float>(row, column);
+    }
+    return gap * static_cast<float>(kClassifiedRegion.step) / (3.f * kEyeWidth);
 }
 
 void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& padded, cv::Mat& iris, cv::Mat& open) {

@@ -54,7 +54,26 @@ struct EyeModelData {
     /// the previous one's corners. Trained on the 300-W annotators' corners
     /// and renders' exact ones (train_eyes). Empty: the landmarks' corners.
     std::vector<PatchForest> corner_stages;
+    /// Optional (file version 4): the open map's lid gap (openMapGap) read on
+    /// the pixel forest's scale, a * gap + b. The openness was tuned on the
+    /// forest's map (a = 1, b = 0); an iris net's map spreads wider (a
+    /// half-lidded eye reads narrower, an open one wider), so train_eyes
+    /// --iris-net fits a and b by least squares of the forest map's gap on the
+    /// net's over the training clips' eyes (docs/gaze.md).
+    float open_map_scale = 1.f;
+    float open_map_offset = 0.f;
 };
+
+/// The lid gap the classifier's open map `open` (kClassifiedRegion's cells)
+/// shows, over the eye width, at 35, 50 and 65 % of the way from the outer
+/// corner: the teacher's aperture (tools/common/teacher.hpp) measured on P_open.
+float openMapGap(const cv::Mat& open);
+
+/// openMapGap on the pixel forest's scale (EyeModelData::open_map_scale): a
+/// second reading of the aperture beside the aperture forest's.
+inline float openMapAperture(const EyeModelData& model, const cv::Mat& open) {
+    return model.open_map_scale * openMapGap(open) + model.open_map_offset;
+}
 
 /// One stage of the corner cascade: the corners `patch` was cut at, moved by
 /// `forest`'s reading of it (outer, inner; frame pixels).
@@ -81,7 +100,7 @@ void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& 
 constexpr std::size_t kMaxCornerStages = 4;
 
 constexpr char kEyeModelMagic[] = "FTEYES01";
-constexpr std::uint32_t kEyeModelVersion = 3;  ///< 1: no iris net; 2: no corner cascade
+constexpr std::uint32_t kEyeModelVersion = 4;  ///< 1: no iris net; 2: no corner cascade; 3: no open-map scale
 
 void writeEyeModel(const std::string& path, const EyeModelData& model);
 /// Throws Error naming the file when it is missing, truncated or corrupt.

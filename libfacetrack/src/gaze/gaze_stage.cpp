@@ -100,20 +100,6 @@ std::array<EyeShapes, 2> eyeShapes(const FaceModel& face) {
     return shapes;
 }
 
-/// The lid gap the classifier's open map shows, over the eye width, at 35, 50
-/// and 65 % of the way from the outer corner: the teacher's aperture
-/// (tools/common/teacher.hpp) measured on P_open, a second reading beside the
-/// aperture forest's.
-float openMapAperture(const cv::Mat& open) {
-    float gap = 0.f;
-    for (const float share : {0.35f, 0.5f, 0.65f}) {
-        const float x = (kOuterX + share * kEyeWidth - static_cast<float>(kClassifiedRegion.x0)) / static_cast<float>(kClassifiedRegion.step);
-        const int column = std::clamp(static_cast<int>(std::lround(x)), 0, kRegionW - 1);
-        for (int row = 0; row < kRegionH; ++row) gap += open.at<float>(row, column);
-    }
-    return gap * static_cast<float>(kClassifiedRegion.step) / (3.f * kEyeWidth);
-}
-
 std::vector<int> gazeExpressions(const FaceModel& face) {
     std::vector<int> out;
     for (const EyeShapes& s : eyeShapes(face)) {
@@ -224,7 +210,7 @@ public:
             model.aperture.evaluate(eye.patch.pixels, 0, 0, &forestAperture[e]);
             // Two readings of one gap, averaged: the forest's alone read an eye looking down, its
             // lids lowered, as half closed frame by frame (docs/gaze.md).
-            aperture[e] = 0.5f * (forestAperture[e] + openMapAperture(eye.open));
+            aperture[e] = 0.5f * (forestAperture[e] + openMapAperture(model, eye.open));
             seen[e].patch = &eye.patch;
             seen[e].iris = &eye.iris;
             seen[e].open = &eye.open;
