@@ -234,6 +234,7 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     EXPECT_EQ(back.provenance, m.provenance);
     EXPECT_EQ(back.open_map_scale, m.open_map_scale);
     EXPECT_EQ(back.open_map_offset, m.open_map_offset);
+    EXPECT_EQ(back.net_map_radius, m.net_map_radius);
     ASSERT_EQ(back.corner_stages.size(), m.corner_stages.size());
     for (std::size_t k = 0; k < m.corner_stages.size(); ++k) EXPECT_EQ(back.corner_stages[k].leaves, m.corner_stages[k].leaves);
 
@@ -279,6 +280,9 @@ TEST(EyeModelFile, RoundTripsAndRejectsDamage) {
     bad = m;
     bad.open_map_offset = std::nanf("");
     EXPECT_THROW(writeEyeModel(copy, bad), Error);
+    bad = m;
+    bad.net_map_radius = kMaxNetMapRadius + 1;
+    EXPECT_THROW(writeEyeModel(copy, bad), Error);
     std::filesystem::remove(copy);
 }
 
@@ -309,6 +313,17 @@ TEST(IrisNet, ReadsEachRegionCellFromItsOwnPatchPixel) {
     iris[1].setTo(-1.f);
     net.classify({&left, nullptr}, {&iris[0], &iris[1]}, {&open[0], &open[1]});
     EXPECT_EQ(iris[1].at<float>(0, 0), -1.f);
+    // The maps the fit reads: the net's, box-smoothed by the model's radius; an eye not cut is left alone.
+    EyeModelData model;
+    model.net_map_radius = 1;
+    std::array<cv::Mat, 2> smoothIris = {iris[0].clone(), iris[1].clone()}, smoothOpen = {open[0].clone(), open[1].clone()};
+    classifyByNet(model, net, {&left, nullptr}, {&smoothIris[0], &smoothIris[1]}, {&smoothOpen[0], &smoothOpen[1]});
+    EXPECT_GT(cv::norm(smoothIris[0] - iris[0], cv::NORM_INF), 1e-3);  // the left patch's ramp: smoothing shows at its borders
+    boxSmooth(iris[0], 1);
+    boxSmooth(open[0], 1);
+    EXPECT_NEAR(cv::norm(smoothIris[0] - iris[0], cv::NORM_INF), 0.0, 1e-6);
+    EXPECT_NEAR(cv::norm(smoothOpen[0] - open[0], cv::NORM_INF), 0.0, 1e-6);
+    EXPECT_EQ(smoothIris[1].at<float>(0, 0), -1.f);
     EXPECT_THROW(IrisNet("not an onnx file", "junk"), Error);
     // A net of the wrong output size: the cascade's parity net (7 outputs for a 64 px patch) does not run on eye patches.
     EXPECT_THROW(IrisNet(test::fixtureBytes("cnn_parity.onnx"), "the cascade's net"), Error);
@@ -330,6 +345,32 @@ TEST(OpenMap, ItsLidGapIsTheOpenRowsOverTheEyeWidthOnTheModelsScale) {
     EXPECT_NEAR(openMapGap(open), gap, 1e-6f);
 }
 
+TEST(OpenMap, TheBoxSpreadsACellOverItsNeighboursAndRepeatsTheBorder) {
+    const int rows = kClassifiedRegion.rows(), columns = kClassifiedRegion.columns();
+    cv::Mat map(rows, columns, CV_32F, cv::Scalar(0.f));
+    map.at<float>(4, 7) = 9.f;
+    boxSmooth(map, 1);
+    for (int y = 0; y < rows; ++y)
+        for (int x = 0; x < columns; ++x)
+            EXPECT_FLOAT_EQ(map.at<float>(y, x), std::abs(y - 4) <= 1 && std::abs(x - 7) <= 1 ? 1.f : 0.f) << y << ", " << x;
+    // A corner cell counts in its own box four times (its row and column repeated), an edge cell twice.
+    map.setTo(0.f);
+    map.at<float>(0, 0) = 9.f;
+    boxSmooth(map, 1);
+    EXPECT_FLOAT_EQ(map.at<float>(0, 0), 4.f);
+    EXPECT_FLOAT_EQ(map.at<float>(0, 1), 2.f);
+    EXPECT_FLOAT_EQ(map.at<float>(1, 1), 1.f);
+    // A constant map stays, radius 0 changes nothing, a map of another size is an error.
+    map.setTo(0.3f);
+    boxSmooth(map, 2);
+    EXPECT_NEAR(cv::norm(map - 0.3f, cv::NORM_INF), 0.0, 1e-6);
+    map.at<float>(2, 2) = 5.f;
+    boxSmooth(map, 0);
+    EXPECT_EQ(map.at<float>(2, 2), 5.f);
+    cv::Mat other(rows + 1, columns, CV_32F, cv::Scalar(0.f));
+    EXPECT_THROW(boxSmooth(other, 1), Error);
+}
+
 TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneToThree) {
     FACETRACK_REQUIRE_EYE_MODEL();
     EyeModelData m = readEyeModel(test::sourceDir() + "/models/eye_model.ftm");
@@ -337,11 +378,13 @@ TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneToThree) {
     const std::string path = test::tempPath("eyes_cnn.ftm");
     m.open_map_scale = 0.65f;  // the net's open map read on the pixel forest's scale
     m.open_map_offset = 0.09f;
+    m.net_map_radius = 1;
     writeEyeModel(path, m);
     const EyeModelData withNet = readEyeModel(path);
     EXPECT_EQ(withNet.iris_net, m.iris_net);
     EXPECT_EQ(withNet.open_map_scale, 0.65f);
     EXPECT_EQ(withNet.open_map_offset, 0.09f);
+    EXPECT_EQ(withNet.net_map_radius, 1);
     // The stage classifies with it.
     Models models = Models::loadDefault();
     models.eyes = EyeModel::load(path);
@@ -358,22 +401,23 @@ TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneToThree) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("iris net"), std::string::npos) << e.what();
     }
-    // Versions 3 (no open-map scale: the forest's map as read), 2 (no corner stages) and 1 (no iris
-    // net either): the payload without its two last floats, then its last byte (the stage count,
-    // 0), then the empty iris net's length.
+    // Versions 3 (no open-map scale, no net-map box), 2 (no corner stages) and 1 (no iris net
+    // either): the payload without its two floats and an int, then its last byte (the stage
+    // count, 0), then the empty iris net's length.
     EyeModelData plain = m;
     plain.iris_net.clear();
     plain.corner_stages.clear();
     writeEyeModel(path, plain);
     std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
     for (const std::uint32_t version : {3u, 2u, 1u}) {
-        payload.resize(payload.size() - (version == 3 ? 2 * sizeof(float) : version == 2 ? 1 : sizeof(std::uint32_t)));
+        payload.resize(payload.size() - (version == 3 ? 2 * sizeof(float) + sizeof(std::int32_t) : version == 2 ? 1 : sizeof(std::uint32_t)));
         core::writeModelFile(path, kEyeModelMagic, version, payload);
         const EyeModelData old = readEyeModel(path);
         EXPECT_TRUE(old.iris_net.empty());
         EXPECT_TRUE(old.corner_stages.empty());
         EXPECT_EQ(old.open_map_scale, 1.f);
         EXPECT_EQ(old.open_map_offset, 0.f);
+        EXPECT_EQ(old.net_map_radius, 0);
         EXPECT_EQ(old.pixels.leaves, m.pixels.leaves);
     }
     std::filesystem::remove(path);

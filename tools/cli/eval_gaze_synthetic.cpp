@@ -104,7 +104,7 @@ public:
             iris[e] = &eye.iris;
             open[e] = &eye.open;
         }
-        if (net_) net_->classify(patches, iris, open);
+        if (net_) gaze::classifyByNet(eyes_->data(), *net_, patches, iris, open);
         else for (std::size_t e = 0; e < 2; ++e) gaze::classifyByForest(eyes_->data(), eyes_seen_[e].patch.pixels, padded_, eyes_seen_[e].iris, eyes_seen_[e].open);
         std::array<std::array<double, 2>, 2> out{};
         const gaze::GazeAngles none{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};

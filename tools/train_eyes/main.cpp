@@ -48,7 +48,7 @@ const char* kUsage = R"(usage: train_eyes [--out models/eye_model.ftm] [--holdou
                   [--pixel-trees N] [--pixel-depth D] [--aperture-trees N] [--aperture-depth D] [--seed S]
                   [--synthetic RENDERS] [--synthetic-pixels] [--samples-out DIR]
                   [--corner-trees N] [--corner-depth D] [--corner-stages K]
-                  [--corner-synthetic RENDERS] [--iris-net NET.onnx] [--from MODEL.ftm [--corners]]
+                  [--corner-synthetic RENDERS] [--iris-net NET.onnx [--net-map-radius R]] [--from MODEL.ftm [--corners]]
 Trains the eye model on the teacher labels in ../shared/data/teacher. Held out from training:
 300-W validation and test, and the clips of --holdout (default: liveportrait_d14_gaze_shifts.mp4,
 fgnet_talking_face_franck.mp4). The aperture forest also learns from RENDERS synthetic renders of
@@ -56,8 +56,9 @@ the face model (default 2,500; exact classes and apertures; eval-gaze renders ot
 forest too with --synthetic-pixels. Reports pixel accuracy and aperture error on held-out eyes.
 --samples-out DIR writes the eye patches instead, for the iris CNN (train_iris_net.py):
 DIR/{train,validation,heldout}_{patches,classes,info}.npy, then stops.
---iris-net puts that CNN in the model, in place of the pixel forest, its open map's lid gap mapped
-onto the forest's scale (least squares over the training clips' eyes). The corner cascade (the eye
+--iris-net puts that CNN in the model, in place of the pixel forest: its maps averaged over boxes of
+(2R + 1)^2 cells (default R = 1), their lid gap mapped onto the forest's scale (least squares over the
+training clips' eyes). The corner cascade (the eye
 corners refined from the patch, which place the eyeballs; default 4 stages) learns the 300-W
 annotators' corners of the train split and the exact corners of RENDERS other renders (default
 12,000), from patches cut near them; reported on 300-W validation and every tenth render, their
@@ -565,7 +566,8 @@ std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::p
 }
 
 /// The iris net's open-map gap on the pixel forest's scale (EyeModelData::open_map_scale): the least-squares
-/// line of the forest map's gap on the net's over `eyes`, reported there and on `check`.
+/// line of the forest map's gap on the net's (smoothed as the stage smooths them) over `eyes`, reported
+/// there and on `check`.
 void calibrateOpenMap(EyeModelData& model, const Dataset& eyes, const Dataset& check, std::ostringstream& provenance) {
     IrisNet net(model.iris_net, "the iris net");
     cv::Mat padded, iris(kClassifiedRegion.rows(), kClassifiedRegion.columns(), CV_32F), netIris = iris.clone();
@@ -574,7 +576,7 @@ void calibrateOpenMap(EyeModelData& model, const Dataset& eyes, const Dataset& c
         std::vector<std::pair<double, double>> out;  // (net, forest)
         for (const EyeSample& e : data.eyes) {
             classifyByForest(model, e.patch, padded, iris, forestOpen);
-            net.classify({&e.patch, nullptr}, {&netIris, &unused}, {&netOpen, &unused});
+            classifyByNet(model, net, {&e.patch, nullptr}, {&netIris, &unused}, {&netOpen, &unused});
             out.emplace_back(openMapGap(netOpen), openMapGap(forestOpen));
         }
         return out;
@@ -639,7 +641,8 @@ int main(int argc, char** argv) {
     try {
         const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                                {"--out", "--holdout", "--pixel-trees", "--pixel-depth", "--aperture-trees", "--aperture-depth", "--seed",
-                                "--synthetic", "--samples-out", "--iris-net", "--from", "--corner-trees", "--corner-depth", "--corner-synthetic", "--corner-stages"},
+                                "--synthetic", "--samples-out", "--iris-net", "--from", "--corner-trees", "--corner-depth", "--corner-synthetic", "--corner-stages",
+                                "--net-map-radius"},
                                {"--help", "--synthetic-pixels", "--corners"});
         if (args.has("--help")) {
             std::puts(kUsage);
@@ -655,8 +658,12 @@ int main(int argc, char** argv) {
         const auto addIrisNet = [&](EyeModelData& model, std::ostringstream& provenance) {
             const std::string path = args.get("--iris-net", "");
             model.iris_net = core::readFileBytes(path, "the iris net '" + path + "'");
+            model.net_map_radius = args.integer("--net-map-radius", 1);
+            if (model.net_map_radius < 0 || model.net_map_radius > kMaxNetMapRadius)
+                throw Error("--net-map-radius: 0 to " + std::to_string(kMaxNetMapRadius));
             provenance << "; iris CNN " << std::filesystem::path(path).filename().string()
-                       << " (tools/train_eyes/train_iris_net.py) in place of the pixel forest";
+                       << " (tools/train_eyes/train_iris_net.py) in place of the pixel forest, its maps averaged over "
+                       << 2 * model.net_map_radius + 1 << " x " << 2 * model.net_map_radius + 1 << " cells";
             Dataset clips, held;
             addClips(clips, held, holdout, nullptr, nullptr, seconds);
             calibrateOpenMap(model, clips, held, provenance);

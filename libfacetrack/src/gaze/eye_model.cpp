@@ -6,6 +6,7 @@
 #include "gaze/iris_net.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string_view>
 
@@ -45,6 +46,7 @@ void validate(const EyeModelData& m, const std::string& what) {
     }
     if (!(m.open_map_scale > 0.1f && m.open_map_scale < 10.f && std::abs(m.open_map_offset) < 1.f))
         throw Error(what + ": corrupt: open-map scale or offset");
+    if (m.net_map_radius < 0 || m.net_map_radius > kMaxNetMapRadius) throw Error(what + ": corrupt: the net maps' box radius");
     if (!m.iris_net.empty()) IrisNet(m.iris_net, what + ": its iris net");  // loads and runs once, or throws
 }
 }  // namespace
@@ -62,6 +64,7 @@ void writeEyeModel(const std::string& path, const EyeModelData& m) {
     for (const PatchForest& f : m.corner_stages) putForest(w, f);
     w.put(m.open_map_scale);
     w.put(m.open_map_offset);
+    w.put<std::int32_t>(m.net_map_radius);
     core::writeModelFile(path, kEyeModelMagic, kEyeModelVersion, w.bytes());
 }
 
@@ -85,6 +88,7 @@ EyeModelData readEyeModel(const std::string& path) {
     if (version >= 4) {
         m.open_map_scale = r.get<float>();
         m.open_map_offset = r.get<float>();
+        m.net_map_radius = r.get<std::int32_t>();
     }
     r.expectEnd();
     validate(m, what);
@@ -118,6 +122,40 @@ float openMapGap(const cv::Mat& open) {
         for (int row = 0; row < kClassifiedRegion.rows(); ++row) gap += open.at<float>(row, column);
     }
     return gap * static_cast<float>(kClassifiedRegion.step) / (3.f * kEyeWidth);
+}
+
+void boxSmooth(cv::Mat& map, int radius) {
+    constexpr int kRows = kClassifiedRegion.rows(), kColumns = kClassifiedRegion.columns();
+    if (map.rows != kRows || map.cols != kColumns || map.type() != CV_32F) throw Error("boxSmooth: not a classified-region map");
+    if (radius <= 0) return;
+    std::array<float, kRows * kColumns> across;  // the rows' sums along x, then the columns' along y
+    const float norm = 1.f / static_cast<float>((2 * radius + 1) * (2 * radius + 1));
+    for (int y = 0; y < kRows; ++y) {
+        const float* row = map.ptr<float>(y);
+        for (int x = 0; x < kColumns; ++x) {
+            float sum = 0.f;
+            for (int d = -radius; d <= radius; ++d) sum += row[std::clamp(x + d, 0, kColumns - 1)];
+            across[static_cast<std::size_t>(y * kColumns + x)] = sum;
+        }
+    }
+    for (int y = 0; y < kRows; ++y) {
+        float* row = map.ptr<float>(y);
+        for (int x = 0; x < kColumns; ++x) {
+            float sum = 0.f;
+            for (int d = -radius; d <= radius; ++d) sum += across[static_cast<std::size_t>(std::clamp(y + d, 0, kRows - 1) * kColumns + x)];
+            row[x] = sum * norm;
+        }
+    }
+}
+
+void classifyByNet(const EyeModelData& model, IrisNet& net, const std::array<const cv::Mat*, 2>& patches,
+                   const std::array<cv::Mat*, 2>& iris, const std::array<cv::Mat*, 2>& open) {
+    net.classify(patches, iris, open);
+    for (std::size_t e = 0; e < 2; ++e) {
+        if (!patches[e]) continue;
+        boxSmooth(*iris[e], model.net_map_radius);
+        boxSmooth(*open[e], model.net_map_radius);
+    }
 }
 
 void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& padded, cv::Mat& iris, cv::Mat& open) {

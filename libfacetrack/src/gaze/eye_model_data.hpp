@@ -62,7 +62,29 @@ struct EyeModelData {
     /// net's over the training clips' eyes (docs/gaze.md).
     float open_map_scale = 1.f;
     float open_map_offset = 0.f;
+    /// Optional (file version 4): the iris net's maps are averaged over a box of
+    /// (2r + 1)^2 grid cells before the fit reads them (0: as the net gives
+    /// them). The net's maps change more sharply from cell to cell than the
+    /// forest's (their mean squared step is 1.5x the forest's on the training
+    /// clips); read unsmoothed, a small face turned 20 degrees and looking down
+    /// held too small a pitch and read as a blink (docs/benchmarks.md, "Session 34").
+    int net_map_radius = 0;
 };
+
+/// At most this box radius (a file with a larger one is corrupt).
+constexpr int kMaxNetMapRadius = 3;
+
+/// `map` (kClassifiedRegion's size, CV_32F) averaged in place over a box of
+/// (2 radius + 1)^2 cells, the borders repeated. Allocates nothing.
+void boxSmooth(cv::Mat& map, int radius);
+
+class IrisNet;
+
+/// P(iris) and P(open) of the eyes whose patch is given, by the model's iris
+/// net `net` (IrisNet::classify), each map then box-smoothed by the model's
+/// net_map_radius: the maps the gaze fit reads.
+void classifyByNet(const EyeModelData& model, IrisNet& net, const std::array<const cv::Mat*, 2>& patches,
+                   const std::array<cv::Mat*, 2>& iris, const std::array<cv::Mat*, 2>& open);
 
 /// The lid gap the classifier's open map `open` (kClassifiedRegion's cells)
 /// shows, over the eye width, at 35, 50 and 65 % of the way from the outer
@@ -100,7 +122,7 @@ void classifyByForest(const EyeModelData& model, const cv::Mat& patch, cv::Mat& 
 constexpr std::size_t kMaxCornerStages = 4;
 
 constexpr char kEyeModelMagic[] = "FTEYES01";
-constexpr std::uint32_t kEyeModelVersion = 4;  ///< 1: no iris net; 2: no corner cascade; 3: no open-map scale
+constexpr std::uint32_t kEyeModelVersion = 4;  ///< 1: no iris net; 2: no corner cascade; 3: no open-map scale or net-map box
 
 void writeEyeModel(const std::string& path, const EyeModelData& model);
 /// Throws Error naming the file when it is missing, truncated or corrupt.

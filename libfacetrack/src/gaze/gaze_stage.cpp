@@ -300,7 +300,7 @@ private:
                 iris[e] = &s.eyes[e].iris;
                 open[e] = &s.eyes[e].open;
             }
-            iris_net_->classify(patches, iris, open);
+            classifyByNet(model, *iris_net_, patches, iris, open);
             return;
         }
         for (std::size_t e = 0; e < 2; ++e)
