@@ -610,7 +610,8 @@ void calibrateOpenMap(EyeModelData& model, const Dataset& eyes, const Dataset& c
     provenance << line;
 }
 
-/// The eyes of the clips in ../shared/data/clips, not jittered: those named in `holdout` into `held`, the others into `train`.
+/// The eyes of the clips in ../shared/data/clips, in name order: those named in `holdout` into `held`, the others into
+/// `train`, with copies cut at jittered corners when `jitter` is given.
 void addClips(Dataset& train, Dataset& held, const std::vector<std::string>& holdout, std::vector<std::string>* trainNames,
               std::mt19937* jitter, const std::function<double()>& seconds) {
     const std::string shared = core::sharedDirectory();
