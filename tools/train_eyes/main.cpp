@@ -8,6 +8,7 @@
 
 #include "app/args.hpp"
 #include "app/image_view.hpp"
+#include "cli/stats.hpp"
 #include "common/faces300w.hpp"
 #include "common/npy_writer.hpp"
 #include "common/synthetic_face.hpp"
@@ -572,41 +573,46 @@ void calibrateOpenMap(EyeModelData& model, const Dataset& eyes, const Dataset& c
     IrisNet net(model.iris_net, "the iris net");
     cv::Mat padded, iris(kClassifiedRegion.rows(), kClassifiedRegion.columns(), CV_32F), netIris = iris.clone();
     cv::Mat forestOpen = iris.clone(), netOpen = iris.clone(), unused = iris.clone();
+    struct Gaps {
+        std::vector<double> net, forest;
+    };
     const auto gaps = [&](const Dataset& data) {
-        std::vector<std::pair<double, double>> out;  // (net, forest)
+        Gaps g;
         for (const EyeSample& e : data.eyes) {
             classifyByForest(model, e.patch, padded, iris, forestOpen);
             classifyByNet(model, net, {&e.patch, nullptr}, {&netIris, &unused}, {&netOpen, &unused});
-            out.emplace_back(openMapGap(netOpen), openMapGap(forestOpen));
+            g.net.push_back(openMapGap(netOpen));
+            g.forest.push_back(openMapGap(forestOpen));
         }
-        return out;
+        return g;
     };
     // Correlation, and the RMS difference of the forest's gap and a * net gap + b.
-    const auto report = [](const std::vector<std::pair<double, double>>& xy, double a, double b, const char* name) {
-        double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, raw = 0, mapped = 0;
-        for (const auto& [x, y] : xy) {
-            sx += x, sy += y, sxx += x * x, syy += y * y, sxy += x * y;
-            raw += (x - y) * (x - y);
-            mapped += (a * x + b - y) * (a * x + b - y);
+    const auto report = [](const Gaps& g, double a, double b, const char* name) {
+        double raw = 0, mapped = 0;
+        for (std::size_t i = 0; i < g.net.size(); ++i) {
+            raw += (g.net[i] - g.forest[i]) * (g.net[i] - g.forest[i]);
+            mapped += (a * g.net[i] + b - g.forest[i]) * (a * g.net[i] + b - g.forest[i]);
         }
-        const double n = static_cast<double>(xy.size());
-        const double r = (sxy / n - sx * sy / n / n) / std::sqrt((sxx / n - sx * sx / n / n) * (syy / n - sy * sy / n / n));
-        std::printf("  %s: %zu eyes, r = %.3f; RMS against the forest map's gap: %.4f as read, %.4f mapped\n", name, xy.size(), r,
-                    std::sqrt(raw / n), std::sqrt(mapped / n));
+        const double n = static_cast<double>(g.net.size());
+        std::printf("  %s: %zu eyes, r = %.3f; RMS against the forest map's gap: %.4f as read, %.4f mapped\n", name, g.net.size(),
+                    cli::pearson(g.net, g.forest), std::sqrt(raw / n), std::sqrt(mapped / n));
     };
-    const auto xy = gaps(eyes);
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (const auto& [x, y] : xy) sx += x, sy += y, sxx += x * x, sxy += x * y;
-    const double n = static_cast<double>(xy.size());
-    if (xy.size() < 100) throw Error("too few eyes to calibrate the iris net's open map");
-    model.open_map_scale = static_cast<float>((sxy - sx * sy / n) / (sxx - sx * sx / n));
-    model.open_map_offset = static_cast<float>((sy - model.open_map_scale * sx) / n);
+    const Gaps train = gaps(eyes);
+    if (train.net.size() < 100) throw Error("too few eyes to calibrate the iris net's open map");
+    const double meanNet = cli::mean(train.net), meanForest = cli::mean(train.forest);
+    double sxy = 0, sxx = 0;
+    for (std::size_t i = 0; i < train.net.size(); ++i) {
+        sxy += (train.net[i] - meanNet) * (train.forest[i] - meanForest);
+        sxx += (train.net[i] - meanNet) * (train.net[i] - meanNet);
+    }
+    model.open_map_scale = static_cast<float>(sxy / sxx);
+    model.open_map_offset = static_cast<float>(meanForest - sxy / sxx * meanNet);
     std::printf("open map: the net's gap x reads as the forest's %.3f x %+.3f\n", model.open_map_scale, model.open_map_offset);
-    report(xy, model.open_map_scale, model.open_map_offset, "training clips");
+    report(train, model.open_map_scale, model.open_map_offset, "training clips");
     report(gaps(check), model.open_map_scale, model.open_map_offset, "held-out clips");
     char line[160];
     std::snprintf(line, sizeof line, "; its open map's gap read as %.3f x %+.3f (least squares onto the pixel forest map's, %zu training-clip eyes)",
-                  model.open_map_scale, model.open_map_offset, xy.size());
+                  model.open_map_scale, model.open_map_offset, train.net.size());
     provenance << line;
 }
 
