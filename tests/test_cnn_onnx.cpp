@@ -196,6 +196,10 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     reading.expressions_only = true;
     cnn::writeCnnModel(test::tempPath("cascade_expressions.ftm"), reading);
     EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_expressions.ftm"))->expressionsOnly());
+    EXPECT_FALSE(CnnModel::load(test::tempPath("cascade_expressions.ftm"))->data().mirror_averaged);
+    reading.mirror_averaged = true;
+    cnn::writeCnnModel(test::tempPath("cascade_mirrored.ftm"), reading);
+    EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_mirrored.ftm"))->data().mirror_averaged);
     for (const auto& [neutral, reported] : {std::pair<std::vector<float>, std::vector<bool>>{{0.1f, 0.2f}, {}}, {{}, {true, false}},
                                             {{1.f}, {}}, {{std::nanf("")}, {}}}) {
         cnn::CnnModelData bad = reading;  // one expression: two values, or a neutral outside [0, 1)
@@ -295,6 +299,44 @@ TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
     EXPECT_FALSE(cnn::refine(layout, net, grey, camera, params, 2, work));
     params.pose[0] = std::nan("");
     EXPECT_FALSE(cnn::refine(layout, net, grey, camera, params, 1, work));
+}
+
+// A mirror-averaged update (update_net.hpp). The fixture net reads the patch's left half into its first
+// expression only (tests/data/mirror_fixture.onnx: 0.3 + 0.1 L, L the standardised patch's mean over
+// columns 0-31; the second 0), so alone it reads a face and its mirror image differently. Averaged with
+// the flipped patch's update mirrored back, the pair reads 0.15 + 0.05 L and 0.15 - 0.05 L.
+TEST(CnnRefine, AMirrorAveragedUpdateIsThePatchsAndItsMirrorImagesUpdatesAveraged) {
+    const std::vector<std::string> brows = {"browDown_L", "browDown_R"};
+    const cnn::UpdateMirror mirror = cnn::updateMirror(brows);
+    EXPECT_EQ(mirror.order, (std::vector<int>{0, 1, 2, 3, 4, 5, 7, 6}));
+    EXPECT_EQ(mirror.sign, (Eigen::VectorXd(8) << 1, -1, -1, -1, 1, 1, 1, 1).finished());
+    EXPECT_EQ(cnn::updateMirror({"jawOpen"}).order.back(), 6);
+    EXPECT_THROW(cnn::updateMirror({"browDown_L"}), Error);  // its partner is not read
+
+    const auto face = FaceModel::load(test::shippedFaceModel());
+    const cnn::WarpLayout layout = cnn::makeWarpLayout(face->data(), cnn::expressionIndices(face->expressionNames(), brows));
+    const std::string onnx = test::fixtureBytes("mirror_fixture.onnx");
+    cnn::PatchNet one(onnx, 64, 8, "mirror fixture"), two(onnx, 64, 8, "mirror fixture, two at a time", 2);
+    cv::Mat grey(480, 640, CV_8UC1);
+    for (int x = 0; x < grey.cols; ++x) grey.col(x).setTo(30 + x / 4);  // darker to the image's left
+    const fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    fit::FaceParams alone;
+    alone.expression = Eigen::VectorXd::Zero(2);
+    alone.pose[5] = 50.0;
+    fit::FaceParams averaged = alone;
+    cnn::RefineWork work;
+    work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
+    ASSERT_TRUE(cnn::refine(layout, one, grey, camera, alone, 1, work));
+    cv::Scalar mean, sigma;
+    cv::meanStdDev(work.patch, mean, sigma);
+    const double left = (cv::mean(work.patch.colRange(0, 32))[0] - mean[0]) / sigma[0];
+    ASSERT_GT(std::abs(left), 0.3) << "the patch's halves must differ for the test to mean something";
+    EXPECT_NEAR(alone.expression[0], 0.3 + 0.1 * left, 1e-4);
+    EXPECT_NEAR(alone.expression[1], 0.0, 1e-6);
+    ASSERT_TRUE(cnn::refine(layout, two, grey, camera, averaged, 1, work, &mirror));
+    EXPECT_NEAR(averaged.expression[0], 0.15 + 0.05 * left, 1e-4);
+    EXPECT_NEAR(averaged.expression[1], 0.15 - 0.05 * left, 1e-4);
+    EXPECT_EQ(averaged.pose, alone.pose);  // no pose change either way
 }
 
 /// The shipped models without eyes or a cascade, and a tracker without the filter: the cnn stage's inputs alone.
@@ -513,6 +555,9 @@ TEST(CnnModelFile, HoldsALandmarkRefinerAloneOrBesideACascade) {
     EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
     bad = refinerOnly(0.5f);
     bad.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");  // it refines a cascade's face: needs stages
+    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    bad = refinerOnly(0.5f);
+    bad.mirror_averaged = true;  // no stage to average
     EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
 }
 

@@ -3,6 +3,7 @@
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
 //                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv] [--min-validation-r R]]
+//                        [--mirror-average]
 //                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
 //
@@ -20,6 +21,8 @@
 // training rows (cnn_model_data.hpp says why). --min-validation-r: only the expressions whose
 // estimate agreed with the labels on the 300-W validation crops by at least R (Pearson, the mean of
 // a left / right pair; the trainer's OUT.validation_r.txt beside the net) are reported.
+// --mirror-average: the stages read each patch and its mirror image and apply the mean update
+// (cnn/update_net.hpp, refine), so that a face and its mirror image read alike; twice the nets' time.
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
@@ -123,11 +126,11 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from",
                                                                                                   "--min-validation-r", "--refiner", "--sides", "--base"},
-                           {"--help", "--expressions-only"});
+                           {"--help", "--expressions-only", "--mirror-average"});
     if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
         std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
                   "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
-                  "                [--sides S.onnx] [--base FILE.ftm]");
+                  "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = split(args.get("--nets", ""));
@@ -154,6 +157,11 @@ int run(int argc, char** argv) {
         cnn::PatchNet check(stage.onnx, model.patch_size, 6 + static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
         model.stages.push_back(std::move(stage));
         std::printf("stage %zu: %s, %d round(s), %zu bytes\n", i + 1, nets[i].c_str(), model.stages.back().rounds, model.stages.back().onnx.size());
+    }
+    if (args.has("--mirror-average")) {
+        if (model.stages.empty()) throw Error("--mirror-average needs cascade stages (--nets)");
+        cnn::updateMirror(model.expressions);  // every sided expression's partner is there, or it throws
+        model.mirror_averaged = true;
     }
     if (args.has("--landmark-net")) {
         const std::string path = args.get("--landmark-net");

@@ -102,3 +102,18 @@ pooled = torch.nn.Sequential(torch.nn.Conv2d(1, 4, 3, padding=1), torch.nn.ReLU(
 torch.onnx.export(pooled.eval(), torch.zeros(1, 1, 16, 16), os.path.join(out, "pooled_fixture.onnx"), opset_version=13,
                   input_names=["patch"], output_names=["values"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
 print(f"wrote {out}/pooled_fixture.onnx")
+
+# A stage that reads a patch's sides unequally (mirror_fixture.onnx, for a mirror-averaged cascade): no
+# pose change, its first expression 0.3 + 0.1 L with L the standardised patch's mean over its left half
+# (columns 0-31), its second 0. Read with the patch flipped and mirrored back, the two average to
+# 0.15 + 0.05 L and 0.15 - 0.05 L.
+mirror = torch.nn.Sequential(torch.nn.Conv2d(1, 1, 1), torch.nn.Flatten(), torch.nn.Linear(64 * 64, 8))
+with torch.no_grad():
+    mirror[0].weight.fill_(1.0)
+    mirror[0].bias.zero_()
+    mirror[2].weight.zero_()
+    mirror[2].bias.copy_(torch.tensor([0.0] * 6 + [0.3, 0.0]))
+    mirror[2].weight[6].view(64, 64)[:, :32] = 0.1 / (64 * 32)
+torch.onnx.export(mirror.eval(), torch.zeros(1, 1, 64, 64), os.path.join(out, "mirror_fixture.onnx"), opset_version=13,
+                  input_names=["patch"], output_names=["update"], do_constant_folding=True, training=torch.onnx.TrainingMode.EVAL)
+print(f"wrote {out}/mirror_fixture.onnx")

@@ -195,6 +195,8 @@ def main():
                         "loss and choose the best epoch; give samples whose starts are the fit's (make_cnn_samples "
                         "--starts-from fit), as at run time: starts near the label would teach corrections, not readings")
     p.add_argument("--dropout", type=float, default=0.0, help="dropout before the last layer (not in the export)")
+    p.add_argument("--widths", default="16,32,64,96", help="the four conv blocks' channels, comma-separated")
+    p.add_argument("--hidden", type=int, default=256, help="the hidden linear layer's width")
     p.add_argument("--hold-out-clips", default="", help="clips also left out of training, comma-separated parts of their names")
     a = p.parse_args()
     HOLD_OUT_CLIPS.extend(c for c in a.hold_out_clips.split(",") if c)
@@ -241,12 +243,14 @@ def main():
     print(f"training samples: {n_faces} 300-W, {n_profiled} profiled, {n_clips} clip; validation "
           f"{ {k: len(v[0]) for k, v in validation.items()} }; outputs {y_train.shape[1]}", flush=True)
 
-    net = Stage(y_train.shape[1], dropout=a.dropout)
+    widths = tuple(int(w) for w in a.widths.split(","))
+    net = Stage(y_train.shape[1], widths, a.hidden, a.dropout)
     opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
     epoch, started, best = 0, time.time(), float("inf")
     if a.export_only:
         state = torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))
-        net = Stage(y_train.shape[1], dropout=state.get("dropout", a.dropout))  # the layers it was trained with
+        # the layers it was trained with
+        net = Stage(y_train.shape[1], state.get("widths", widths), state.get("hidden", a.hidden), state.get("dropout", a.dropout))
         net.load_state_dict(state["net"])
         # The spread the net was trained with (older checkpoints lack it: then the given samples' own,
         # which must be the training run's --samples).
@@ -318,10 +322,11 @@ def main():
         line += f" {time.time() - started:.0f} s"
         print(line, flush=True); log.write(line + "\n"); log.flush()
         torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best, "scale": scale,
-                    "dropout": a.dropout}, a.out + ".pt")
+                    "dropout": a.dropout, "widths": widths, "hidden": a.hidden}, a.out + ".pt")
         if score < best:  # the net that exports: the best on the validation crops (the test crops choose nothing)
             best = score
-            torch.save({"net": net.state_dict(), "epoch": epoch, "scale": scale, "dropout": a.dropout}, a.out + ".best.pt")
+            torch.save({"net": net.state_dict(), "epoch": epoch, "scale": scale, "dropout": a.dropout, "widths": widths,
+                        "hidden": a.hidden}, a.out + ".best.pt")
     if os.path.exists(a.out + ".best.pt"):
         net.load_state_dict(torch.load(a.out + ".best.pt")["net"])
     net.eval()

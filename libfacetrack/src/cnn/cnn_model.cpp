@@ -47,6 +47,7 @@ void validate(const CnnModelData& m, const std::string& what) {
     for (const float w : m.neutral) {
         if (!(w >= 0.f && w < 1.f)) throw Error(what + ": corrupt: a neutral weight outside [0, 1)");
     }
+    if (m.mirror_averaged && m.stages.empty()) throw Error(what + ": corrupt: mirror averaging without cascade stages");
     for (const auto& s : m.stages) {
         if (s.rounds < 1 || s.rounds > kMaxRounds || s.onnx.empty()) throw Error(what + ": corrupt: a stage");
     }
@@ -91,6 +92,7 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     w.put<std::int32_t>(m.side_patch_size);
     for (const float v : m.side_mean) w.put<float>(v);
     for (const float v : m.side_share) w.put<float>(v);
+    w.put<std::uint8_t>(m.mirror_averaged ? 1 : 0);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -148,6 +150,11 @@ CnnModelData readCnnModel(const std::string& path) {
             for (int i = 0; i < 22; ++i) m.side_mean.push_back(r.get<float>());
             for (int i = 0; i < 11; ++i) m.side_share.push_back(r.get<float>());
         }
+    }
+    if (version >= 7) {
+        const auto mirrored = r.get<std::uint8_t>();
+        if (mirrored > 1) r.fail("the mirror-averaging flag");
+        m.mirror_averaged = mirrored == 1;
     }
     r.expectEnd();
     validate(m, what);

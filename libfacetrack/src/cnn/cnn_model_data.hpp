@@ -29,6 +29,10 @@ struct CnnModelData {
     /// Per expression (empty: all), whether an expressions-only stage reports it: the packer keeps
     /// those whose estimate agreed with the labels on the validation crops (docs/cnn.md). Version 3.
     std::vector<bool> reported;
+    /// The stages read each patch and its mirror image and apply the mean update (update_net.hpp,
+    /// refine): the face and its mirror image read alike. Their nets then need each sided
+    /// expression's partner among `expressions`. Format version 7.
+    bool mirror_averaged = false;
     /// The final net, the 68 landmarks' displacements (landmark_net.hpp): ONNX bytes, or empty for none.
     std::string landmark_net;
     std::string provenance;
@@ -50,7 +54,7 @@ struct CnnModelData {
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 6;
+constexpr std::uint32_t kCnnModelVersion = 7;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

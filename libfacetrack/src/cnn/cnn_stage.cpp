@@ -34,9 +34,10 @@ public:
             const bool read = d.reported.empty() || d.reported[k];
             if (!d.expressions_only || (!fitted && read)) reported_.push_back(static_cast<int>(k));
         }
+        if (d.mirror_averaged) mirror_ = updateMirror(d.expressions);
         for (std::size_t i = 0; i < d.stages.size(); ++i) {
             nets_.emplace_back(d.stages[i].onnx, d.patch_size, 6 + static_cast<int>(d.expressions.size()),
-                               "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1));
+                               "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1), mirror_ ? 2 : 1);
         }
         if (cascade_->hasLandmarkNet()) {
             landmark_basis_ = landmarkBasis(*face_, layout_.anchors.expressions);
@@ -53,7 +54,8 @@ public:
         return {"cnn", true,
                 std::string(cascade_->expressionsOnly() ? "expressions only (" + std::to_string(reported_.size()) + " beside the fit's), " : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
-                    std::to_string(layout_.anchors.expressions.size()) + " expressions" + (landmark_net_ ? ", landmark net" : "") +
+                    std::to_string(layout_.anchors.expressions.size()) + " expressions" + (mirror_ ? ", mirror-averaged" : "") +
+                    (landmark_net_ ? ", landmark net" : "") +
                     "; nets on the " + nets_.front().engineName() + " (" +
                     cascade_->sourcePath() + ")"};
     }
@@ -86,7 +88,9 @@ public:
         readParams(*r.pose, r.expression->native, layout_.anchors.expressions, s.params);
         const auto& stages = cascade_->data().stages;
         for (std::size_t i = 0; i < nets_.size(); ++i) {
-            if (!refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work)) return true;  // keep the fit's answer
+            if (!refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work, mirror_ ? &*mirror_ : nullptr)) {
+                return true;  // keep the fit's answer
+            }
         }
         if (!cascade_->expressionsOnly()) r.pose = fit::headPoseOf(s.params);
         std::vector<float>& native = r.expression->native;
@@ -123,6 +127,7 @@ private:
     std::vector<PatchNet> nets_;
     fit::FitBasis landmark_basis_;
     std::optional<PatchNet> landmark_net_;
+    std::optional<UpdateMirror> mirror_;
     std::vector<int> reported_;  ///< the layout's expressions (positions in it) this stage writes
 };
 

@@ -1,8 +1,10 @@
 #include "cnn/update_net.hpp"
 
 #include "facetrack/error.hpp"
+#include "fit/fit_basis.hpp"
 
 #include <algorithm>
+#include <array>
 
 namespace facetrack::cnn {
 
@@ -42,15 +44,43 @@ void applyUpdate(const WarpLayout& layout, const Eigen::VectorXd& update, fit::F
     for (Eigen::Index k = 0; k < n; ++k) params.expression[k] = std::clamp(params.expression[k] + update[6 + k], 0.0, 1.0);
 }
 
+UpdateMirror updateMirror(const std::vector<std::string>& expressions) {
+    UpdateMirror m;
+    m.order = {0, 1, 2, 3, 4, 5};
+    m.sign = Eigen::VectorXd::Ones(6 + static_cast<Eigen::Index>(expressions.size()));
+    m.sign.segment<3>(1).setConstant(-1.0);  // w_y, w_z, c_x
+    for (const auto& name : expressions) {
+        const std::string partner = fit::mirrorName(name);
+        const auto it = std::find(expressions.begin(), expressions.end(), partner.empty() ? name : partner);
+        if (it == expressions.end()) {
+            throw Error("a mirror-averaged CNN stage needs " + name + "'s partner " + partner + " among its expressions");
+        }
+        m.order.push_back(6 + static_cast<int>(it - expressions.begin()));
+    }
+    return m;
+}
+
 bool refine(const WarpLayout& layout, PatchNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
-            int rounds, RefineWork& work) {
+            int rounds, RefineWork& work, const UpdateMirror* mirror) {
     constexpr double kMinDepthCm = 1.0;
     for (int i = 0; i < rounds; ++i) {
         if (!params.pose.allFinite() || centreOf(layout, params).z() < kMinDepthCm) return false;
         projectAnchors(layout, work.identity_shape, camera, params, work.anchors3d, work.anchors);
         if (!work.anchors.allFinite()) return false;
         warpFace(layout, grey, work.anchors, work.patch);
-        applyUpdate(layout, net.predict(work.patch), params);
+        if (!mirror) {
+            applyUpdate(layout, net.predict(work.patch), params);
+            continue;
+        }
+        cv::flip(work.patch, work.mirrored, 1);
+        const std::array<cv::Mat, 2> both{work.patch, work.mirrored};
+        const Eigen::VectorXd& out = net.predict(both);
+        const Eigen::Index n = net.outputCount();
+        work.update.resize(n);
+        for (Eigen::Index k = 0; k < n; ++k) {
+            work.update[k] = 0.5 * (out[k] + mirror->sign[k] * out[n + mirror->order[static_cast<std::size_t>(k)]]);
+        }
+        applyUpdate(layout, work.update, params);
     }
     return params.pose.allFinite() && centreOf(layout, params).z() >= kMinDepthCm;
 }
