@@ -198,8 +198,13 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_expressions.ftm"))->expressionsOnly());
     EXPECT_FALSE(CnnModel::load(test::tempPath("cascade_expressions.ftm"))->data().mirror_averaged);
     reading.mirror_averaged = true;
+    reading.corrects_fit = true;
     cnn::writeCnnModel(test::tempPath("cascade_mirrored.ftm"), reading);
     EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_mirrored.ftm"))->data().mirror_averaged);
+    EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_mirrored.ftm"))->data().corrects_fit);
+    cnn::CnnModelData correctingAll = m;  // a cascade that refines everything has no fit's shapes to correct apart
+    correctingAll.corrects_fit = true;
+    EXPECT_THROW(cnn::writeCnnModel(test::tempPath("cascade_bad.ftm"), correctingAll), Error);
     for (const auto& [neutral, reported] : {std::pair<std::vector<float>, std::vector<bool>>{{0.1f, 0.2f}, {}}, {{}, {true, false}},
                                             {{1.f}, {}}, {{std::nanf("")}, {}}}) {
         cnn::CnnModelData bad = reading;  // one expression: two values, or a neutral outside [0, 1)
@@ -394,7 +399,8 @@ TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
 // A cascade that reads expressions keeps the fit's pose and the shapes the fit estimates, and adds
 // the others. The fixture net's update is constant: no pose change, +0.3 on its one expression,
 // named as a shape the fit does not estimate (browDown_L: it reads 0.3; with a neutral of 0.1,
-// (0.3 - 0.1) / 0.9; not reported: 0), or as one it does (jawOpen: the stage writes nothing).
+// (0.3 - 0.1) / 0.9; not reported: 0), or as one it does (jawOpen: the stage writes nothing, or,
+// correcting the fit, the fit's value + 0.3 whatever the neutral).
 TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
     FACETRACK_REQUIRE_SHARED();
     Models models = fitOnly();
@@ -409,13 +415,16 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
         std::vector<float> neutral;
         std::vector<bool> reported;
         float browDownLeft;  ///< what the stage reports; negative: the fit's own value
+        bool correctsFit = false;
     };
     for (const Case& c : {Case{"browDown_L", {}, {}, 0.3f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f},
-                          Case{"browDown_L", {}, {false}, -1.f}, Case{"jawOpen", {}, {}, -1.f}}) {
+                          Case{"browDown_L", {}, {false}, -1.f}, Case{"jawOpen", {}, {}, -1.f},
+                          Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f, true}, Case{"jawOpen", {0.1f}, {}, -1.f, true}}) {
         cnn::CnnModelData m;
         m.expressions = {c.shape};
         m.stages.push_back({1, test::fixtureBytes("cnn_expression_fixture.onnx")});
         m.expressions_only = true;
+        m.corrects_fit = c.correctsFit;
         m.neutral = c.neutral;
         m.reported = c.reported;
         const std::string path = test::tempPath("cascade_reads_" + c.shape + ".ftm");
@@ -426,6 +435,7 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
         Tracker with(models, config);
         without.reset();
         EXPECT_EQ(with.estimatedShapes().size(), fitted.size() + (c.browDownLeft < 0.f ? 0 : 1)) << c.shape;
+        const bool corrected = c.correctsFit && c.shape == "jawOpen";
         FrameResult a, b;
         for (std::size_t i = 0; i < frames.size(); ++i) {
             const ImageView view{frames[i].data, frames[i].cols, frames[i].rows, frames[i].step, PixelFormat::Bgr8};
@@ -439,6 +449,10 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
             const auto& wb = b.faces[0].expression->arkit;
             for (std::size_t k = 0; k < wa.size(); ++k) {
                 const bool read = arkitNames()[k] == "browDownLeft" && c.browDownLeft >= 0.f;
+                if (corrected && arkitNames()[k] == "jawOpen") {
+                    EXPECT_NEAR(wb[k], std::min(1.f, wa[k] + 0.3f), 1e-5f) << "frame " << i;
+                    continue;
+                }
                 EXPECT_NEAR(wb[k], read ? c.browDownLeft : wa[k], read ? 1e-5f : 0.f) << arkitNames()[k] << ", reading " << c.shape << ", frame " << i;
             }
         }

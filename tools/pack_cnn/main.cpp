@@ -3,7 +3,7 @@
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
 //                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv] [--min-validation-r R]]
-//                        [--mirror-average]
+//                        [--mirror-average] [--corrects-fit]
 //                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
 //
@@ -23,6 +23,8 @@
 // a left / right pair; the trainer's OUT.validation_r.txt beside the net) are reported.
 // --mirror-average: the stages read each patch and its mirror image and apply the mean update
 // (cnn/update_net.hpp, refine), so that a face and its mirror image read alike; twice the nets' time.
+// --corrects-fit (with --expressions-only): the stage also corrects the shapes the fit estimates
+// (cnn_model_data.hpp).
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
@@ -126,11 +128,11 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from",
                                                                                                   "--min-validation-r", "--refiner", "--sides", "--base"},
-                           {"--help", "--expressions-only", "--mirror-average"});
+                           {"--help", "--expressions-only", "--mirror-average", "--corrects-fit"});
     if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
         std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
                   "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
-                  "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average]");
+                  "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = split(args.get("--nets", ""));
@@ -146,6 +148,8 @@ int run(int argc, char** argv) {
     }
     model.provenance = args.get("--provenance", model.provenance);
     model.expressions_only = model.expressions_only || args.has("--expressions-only");
+    model.corrects_fit = model.corrects_fit || args.has("--corrects-fit");
+    if (model.corrects_fit && !model.expressions_only) throw Error("--corrects-fit goes with --expressions-only");
     for (std::size_t i = 0; i < nets.size(); ++i) {
         const auto names = expressionColumns(nets[i]);
         if (i == 0) model.expressions = names;

@@ -48,6 +48,7 @@ void validate(const CnnModelData& m, const std::string& what) {
         if (!(w >= 0.f && w < 1.f)) throw Error(what + ": corrupt: a neutral weight outside [0, 1)");
     }
     if (m.mirror_averaged && m.stages.empty()) throw Error(what + ": corrupt: mirror averaging without cascade stages");
+    if (m.corrects_fit && !m.expressions_only) throw Error(what + ": corrupt: correcting the fit's shapes is a mode of a stage that reads expressions");
     for (const auto& s : m.stages) {
         if (s.rounds < 1 || s.rounds > kMaxRounds || s.onnx.empty()) throw Error(what + ": corrupt: a stage");
     }
@@ -93,6 +94,7 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     for (const float v : m.side_mean) w.put<float>(v);
     for (const float v : m.side_share) w.put<float>(v);
     w.put<std::uint8_t>(m.mirror_averaged ? 1 : 0);
+    w.put<std::uint8_t>(m.corrects_fit ? 1 : 0);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -155,6 +157,9 @@ CnnModelData readCnnModel(const std::string& path) {
         const auto mirrored = r.get<std::uint8_t>();
         if (mirrored > 1) r.fail("the mirror-averaging flag");
         m.mirror_averaged = mirrored == 1;
+        const auto corrects = r.get<std::uint8_t>();
+        if (corrects > 1) r.fail("the fit-correcting flag");
+        m.corrects_fit = corrects == 1;
     }
     r.expectEnd();
     validate(m, what);

@@ -21,6 +21,11 @@ struct CnnModelData {
     /// keeps the fit's pose and the shapes the fit estimates, and reports the others. False: it
     /// refines the pose and all its expressions. (Format version 3; version 2 files refine.)
     bool expressions_only = false;
+    /// With expressions_only: the stage also writes the shapes the fit estimates, the fit's value
+    /// moved by the net's update, without the neutral below. The nets' training starts were the fit's
+    /// answers (make_cnn_samples --starts-from fit), so for those shapes the update is a correction
+    /// of the fit, not a reading from nothing. Format version 7.
+    bool corrects_fit = false;
     /// Per expression (empty: none), the teacher labels' value on a typical face, w0: the median
     /// over the 300-W training crops. The stage reports (w - w0) / (1 - w0), clamped to [0, 1]:
     /// the labels read browDown 0.23 on the median face, and a net trained on them does the same

@@ -32,7 +32,10 @@ public:
             const int e = layout_.anchors.expressions[k];
             const bool fitted = std::find(fitExpressions.begin(), fitExpressions.end(), e) != fitExpressions.end();
             const bool read = d.reported.empty() || d.reported[k];
-            if (!d.expressions_only || (!fitted && read)) reported_.push_back(static_cast<int>(k));
+            if (!d.expressions_only || (read && (!fitted || d.corrects_fit))) {
+                reported_.push_back(static_cast<int>(k));
+                neutralised_.push_back(!fitted);
+            }
         }
         if (d.mirror_averaged) mirror_ = updateMirror(d.expressions);
         for (std::size_t i = 0; i < d.stages.size(); ++i) {
@@ -52,7 +55,8 @@ public:
             rounds += std::to_string(r);
         }
         return {"cnn", true,
-                std::string(cascade_->expressionsOnly() ? "expressions only (" + std::to_string(reported_.size()) + " beside the fit's), " : "") +
+                std::string(cascade_->expressionsOnly() ? "expressions only (" + std::to_string(reported_.size()) +
+                                (cascade_->data().corrects_fit ? ", the fit's corrected" : " beside the fit's") + "), " : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
                     std::to_string(layout_.anchors.expressions.size()) + " expressions" + (mirror_ ? ", mirror-averaged" : "") +
                     (landmark_net_ ? ", landmark net" : "") +
@@ -95,9 +99,12 @@ public:
         if (!cascade_->expressionsOnly()) r.pose = fit::headPoseOf(s.params);
         std::vector<float>& native = r.expression->native;
         const std::vector<float>& neutral = cascade_->data().neutral;
-        for (const int k : reported_) {
+        for (std::size_t i = 0; i < reported_.size(); ++i) {
+            const int k = reported_[i];
             float w = static_cast<float>(s.params.expression[k]);
-            if (!neutral.empty()) w = std::clamp((w - neutral[static_cast<std::size_t>(k)]) / (1.f - neutral[static_cast<std::size_t>(k)]), 0.f, 1.f);
+            if (!neutral.empty() && neutralised_[i]) {
+                w = std::clamp((w - neutral[static_cast<std::size_t>(k)]) / (1.f - neutral[static_cast<std::size_t>(k)]), 0.f, 1.f);
+            }
             native[static_cast<std::size_t>(layout_.anchors.expressions[static_cast<std::size_t>(k)])] = w;
         }
         r.expression->arkit = face_->toArkit(native);
@@ -129,6 +136,7 @@ private:
     std::optional<PatchNet> landmark_net_;
     std::optional<UpdateMirror> mirror_;
     std::vector<int> reported_;  ///< the layout's expressions (positions in it) this stage writes
+    std::vector<bool> neutralised_;  ///< per reported_ entry: a reading the neutral applies to, not a correction of the fit's
 };
 
 }  // namespace
