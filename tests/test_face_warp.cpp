@@ -1,5 +1,6 @@
 // The CNN cascade's input (src/cnn/face_warp): the face texture in canonical space.
 
+#include "cnn/cnn_model_data.hpp"
 #include "cnn/face_warp.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/error.hpp"
@@ -167,6 +168,62 @@ TEST(FaceProfiling, TurnedFaceCarriesThePhotographsTextureAlong) {
     cv::absdiff(face.image, photo, difference);
     EXPECT_GT(cv::mean(difference)[0], 1.0);
     EXPECT_THROW(profile::profileFace(*s.model, cv::Mat(), s.camera, identity, {}, photographed, turned), Error);
+}
+
+TEST(FaceProfiling, ExpressionCopiesMoveOneGroupOfShapesAndCarryTheTextureWithTheMesh) {
+    const auto& s = scene();
+    const cv::Mat photo = smoothTexture(640, 480, 9);
+    const std::vector<std::string> names = {"browDown_L", "browDown_R", "browInnerUp_L", "browInnerUp_R",
+                                            "browOuterUp_L", "browOuterUp_R", "mouthPucker", "jawOpen"};
+    const std::vector<int> ids = cnn::expressionIndices(s.model->expressionNames(), names);
+    fit::FaceParams label = faceAt({0.0, 10.0, 0.0}, {0.0, 0.0, 50.0}, static_cast<Eigen::Index>(ids.size()));
+    label.expression << 0.1, 0.1, 0.0, 0.0, 0.2, 0.2, 0.0, 0.3;
+    const std::vector<float> identity(static_cast<std::size_t>(s.model->identityCount()), 0.f);
+    std::mt19937 rng(5);
+    const auto copies = profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 12, rng);
+    ASSERT_EQ(copies.size(), 12u);  // a frontal face hides nothing when its brows or lips move
+    const std::vector<std::vector<int>> groups = {{0, 1}, {2, 3}, {2, 3, 4, 5}, {6}};  // positions in `names`
+    const auto photographedMesh = s.model->vertices(identity, profile::nativeWeights(*s.model, ids, label.expression));
+    const auto pixelOf = [&](const Vec3& v) {
+        return s.camera.project<double>(fit::rotationOf(label.omega()) * fit::modelToFrontal() * Eigen::Vector3d(v.x, v.y, v.z) / 10.0 +
+                                        label.translation());
+    };
+    double carried = 0.0, unmoved = 0.0;
+    for (const auto& copy : copies) {
+        EXPECT_EQ(copy.label.pose, label.pose);
+        EXPECT_EQ(copy.label.expression[7], label.expression[7]);  // jawOpen is in no group
+        // Exactly one group moved, all its shapes to one weight in [0, 0.9]; the others kept.
+        int matching = 0;
+        for (const auto& group : groups) {
+            const double w = copy.label.expression[group[0]];
+            bool isIt = w >= 0.0 && w <= 0.9;
+            for (int k = 0; k < static_cast<int>(names.size()); ++k) {
+                const bool in = std::find(group.begin(), group.end(), k) != group.end();
+                isIt = isIt && (in ? copy.label.expression[k] == w : copy.label.expression[k] == label.expression[k]);
+            }
+            matching += isIt;
+        }
+        EXPECT_GE(matching, 1) << copy.label.expression.transpose();
+        // A brow, an eye and the lips' points keep their grey level where the moved mesh puts them.
+        const auto movedMesh = s.model->vertices(identity, profile::nativeWeights(*s.model, ids, copy.label.expression));
+        double error = 0.0;
+        for (const int landmark : {19, 24, 21, 39, 48, 51, 54, 57}) {
+            const auto v = static_cast<std::size_t>(s.model->data().landmark_vertices[static_cast<std::size_t>(landmark)]);
+            const Eigen::Vector2d from = pixelOf(photographedMesh[v]), to = pixelOf(movedMesh[v]);
+            const auto grey = [](const cv::Mat& image, const Eigen::Vector2d& p) {
+                return double(image.at<std::uint8_t>(cv::Point(int(std::lround(p.x())), int(std::lround(p.y())))));
+            };
+            error += std::abs(grey(copy.image, to) - grey(photo, from));
+            if ((to - from).norm() > 2.0) {  // moved far enough for the photograph itself to differ there
+                carried += std::abs(grey(copy.image, to) - grey(photo, from));
+                unmoved += std::abs(grey(photo, to) - grey(photo, from));
+            }
+        }
+        EXPECT_LT(error / 8.0, 4.0);
+    }
+    std::printf("points moved over 2 px: grey difference %.0f carried, %.0f had the image not moved\n", carried, unmoved);
+    EXPECT_GT(unmoved, 100.0);  // the test's moves are visible in the texture
+    EXPECT_LT(carried, 0.3 * unmoved);
 }
 
 TEST(FaceProfiling, TurnSequenceGoesOutByTheStepAndComesBack) {

@@ -27,7 +27,7 @@ void NpyWriter::finish() {
     out.write(length, 2);
     out << header;
     std::ifstream body(path_ + ".part", std::ios::binary);
-    out << body.rdbuf();
+    if (body.peek() != std::ifstream::traits_type::eof()) out << body.rdbuf();  // an empty buffer would set failbit: no rows
     if (!out) throw Error("cannot write '" + path_ + "'");
     std::filesystem::remove(path_ + ".part");
 }

@@ -11,18 +11,20 @@
 //
 //   build/tools/make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb 0] [--clip-perturb N]
 //                                [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1]
-//                                [--expression-sigma 0.1] [--profiled N] [--limit N] [--no-clips]
+//                                [--expression-sigma 0.1] [--profiled N] [--expression-copies N] [--limit N] [--no-clips]
 //                                [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]
 //
 // With --profiled N, N copies of each 300-W crop turned to a larger yaw by face
 // profiling (profile/face_profiling.hpp) and their samples, in the set "profiled".
+// With --expression-copies N, N copies of each 300-W training crop with its brows or
+// lips moved (profile::expressionCopies) and their samples, in the set "moved".
 // With --starts-from, the 300-W crops' and copies' starts are perturbed from what
 // the tracker (LBF, fit and that cascade, or LBF and fit alone for "fit"; mean
 // identity) says of each image rather than from the label: what the landmark net,
 // or a first stage, sees at run time. Images where it finds no face, or a start
 // more than --max-start-deg from the label, give no samples.
 //
-// Writes OUT/{faces300w,profiled,clips}_patches.npy (uint8, N x 64 x 64), OUT/{...}_samples.csv
+// Writes OUT/{faces300w,profiled,moved,clips}_patches.npy (uint8, N x 64 x 64), OUT/{...}_samples.csv
 // (row i: key, split, perturbed 0/1, then the start's omega, t, expressions, the label's
 // prefixed "label_", and the update start -> label, prefixed "d_"), and for the 300-W crops
 // and their profiled copies OUT/{faces300w,profiled}_landmarks.npy (float32, N x 136: the
@@ -176,18 +178,16 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
     return own;
 }
 
-/// Face profiling of a 300-W crop (profile::profiledCopies), each copy with its samples;
-/// with `tracker`, from its start on the copy (none: no samples). Returns the copies sampled.
-int profiledSamplesOf(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, int count,
-                      const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches, std::ofstream& samples,
-                      const LandmarkTargets& targets, const TrackerStarts* tracker) {
-    const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
+/// Copies of a 300-W crop made from its fitted mesh (profile/face_profiling.hpp: turned further, or
+/// with shapes moved), each with its samples and its points carried along; with `tracker`, from
+/// its start on the copy (none: no samples). Returns the copies sampled.
+int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, const std::vector<profile::ProfiledCopy>& copies,
+                  const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches, std::ofstream& samples,
+                  const LandmarkTargets& targets, const TrackerStarts* tracker) {
     const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
-    const auto copies = profile::profiledCopies(model, grey, camera, identity,
-                                                profile::nativeWeights(model, layout.anchors.expressions, image.label.expression), image.label,
-                                                count, rng);
     int sampled = 0;
-    for (const auto& copy : copies) {
+    for (std::size_t n = 0; n < copies.size(); ++n) {
+        const profile::ProfiledCopy& copy = copies[n];
         LabelledImage turned = image;
         turned.label = copy.label;
         if (image.landmarks)
@@ -196,7 +196,9 @@ int profiledSamplesOf(const FaceModel& model, const cnn::WarpLayout& layout, con
                                                                            layout.anchors.expressions, turned.start_identity))))
             continue;
         char suffix[32];
-        std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(copy.label.omega()).y());
+        const double yaw = fit::eulerDegrees(copy.label.omega()).y();
+        if (copy.label.pose == image.label.pose) std::snprintf(suffix, sizeof suffix, "@moved%zu", n);
+        else std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", yaw);
         turned.key += suffix;
         samplesOf(layout, turned, copy.image, perturb, rng, patches, samples, targets);
         ++sampled;
@@ -220,12 +222,12 @@ cv::Mat profiledPair(const FaceModel& model, const cnn::WarpLayout& layout, cons
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
-                             "--expression-sigma", "--profiled", "--limit", "--faces300w", "--starts-from", "--max-start-deg"},
+                             "--expression-sigma", "--profiled", "--expression-copies", "--limit", "--faces300w", "--starts-from", "--max-start-deg"},
                            {"--help", "--no-clips"});
     if (args.has("--help")) {
         std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
                   "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
-                  "       [--profiled N] [--limit N] [--faces300w DIR] [--no-clips]\n"
+                  "       [--profiled N] [--expression-copies N] [--limit N] [--faces300w DIR] [--no-clips]\n"
                   "       [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]");
         return 0;
     }
@@ -240,8 +242,10 @@ int run(int argc, char** argv) {
     clipPerturb.count = args.integer("--clip-perturb", perturb.count);
     perturb.expression_sigma = args.number("--expression-sigma", perturb.expression_sigma);
     const auto limit = static_cast<std::size_t>(args.integer("--limit", 1000000000));
-    const int profiled = args.integer("--profiled", 0);
-    if (perturb.count < 0 || clipPerturb.count < 0 || profiled < 0) throw Error("--perturb, --clip-perturb and --profiled must not be negative");
+    const int profiled = args.integer("--profiled", 0), moved = args.integer("--expression-copies", 0);
+    if (perturb.count < 0 || clipPerturb.count < 0 || profiled < 0 || moved < 0) {
+        throw Error("--perturb, --clip-perturb, --profiled and --expression-copies must not be negative");
+    }
     std::filesystem::create_directories(outDir);
 
     const auto model = FaceModel::loadDefault();  // with the landmark convention, as the tracker and the landmark net run
@@ -296,13 +300,17 @@ int run(int argc, char** argv) {
         const dense::LabelColumns c = dense::labelColumns(table, names);
         const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
         NpyWriter patches = patchWriter(outDir + "/faces300w_patches.npy", layout.size),
-                  profiledPatches = patchWriter(outDir + "/profiled_patches.npy", layout.size);
+                  profiledPatches = patchWriter(outDir + "/profiled_patches.npy", layout.size),
+                  movedPatches = patchWriter(outDir + "/moved_patches.npy", layout.size);
         NpyWriter landmarks = landmarkWriter(outDir + "/faces300w_landmarks.npy"),
-                  profiledLandmarks = landmarkWriter(outDir + "/profiled_landmarks.npy");
-        std::ofstream samples(outDir + "/faces300w_samples.csv"), profiledSamples(outDir + "/profiled_samples.csv");
+                  profiledLandmarks = landmarkWriter(outDir + "/profiled_landmarks.npy"),
+                  movedLandmarks = landmarkWriter(outDir + "/moved_landmarks.npy");
+        std::ofstream samples(outDir + "/faces300w_samples.csv"), profiledSamples(outDir + "/profiled_samples.csv"),
+            movedSamples(outDir + "/moved_samples.csv");
         header(samples);
         header(profiledSamples);
-        int profiledFaces = 0;
+        header(movedSamples);
+        int profiledFaces = 0, movedFaces = 0;
         for (std::size_t i = 0; i < std::min(limit, table.rows.size()); ++i) {
             const cv::Mat grey = cv::imread(root + "/" + table.rows[i].key, cv::IMREAD_GRAYSCALE);
             if (grey.empty()) throw Error("cannot read " + root + "/" + table.rows[i].key);
@@ -313,15 +321,28 @@ int run(int argc, char** argv) {
             image.landmarks = points.cast<double>();
             if (!tracker || (image.start = trackerStart(*tracker, grey, *image.landmarks, image.label, layout.anchors.expressions, image.start_identity)))
                 samplesOf(layout, image, grey, perturb, rng, patches, samples, {landmarkBasis, &landmarks});
-            profiledFaces += profiledSamplesOf(*model, layout, image, grey, profiled, perturb, rng, profiledPatches, profiledSamples,
-                                               {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
+            const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+            const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
+            const auto turned = profile::profiledCopies(*model, grey, camera, identity,
+                                                        profile::nativeWeights(*model, layout.anchors.expressions, image.label.expression),
+                                                        image.label, profiled, rng);
+            profiledFaces += copySamplesOf(layout, image, grey, turned, perturb, rng, profiledPatches, profiledSamples,
+                                           {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
+            if (image.split == "train" && moved > 0) {
+                const auto copies = profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng);
+                movedFaces += copySamplesOf(layout, image, grey, copies, perturb, rng, movedPatches, movedSamples,
+                                            {landmarkBasis, &movedLandmarks}, tracker ? &*tracker : nullptr);
+            }
             if ((i + 1) % 20 == 0) std::fprintf(stderr, "\r300-W: %zu / %zu", i + 1, table.rows.size());
         }
         patches.finish();
         profiledPatches.finish();
         landmarks.finish();
         profiledLandmarks.finish();
-        std::fprintf(stderr, "\n300-W: %d samples; %d profiled faces, %d samples\n", patches.rows(), profiledFaces, profiledPatches.rows());
+        movedPatches.finish();
+        movedLandmarks.finish();
+        std::fprintf(stderr, "\n300-W: %d samples; %d profiled faces, %d samples; %d with shapes moved, %d samples\n", patches.rows(),
+                     profiledFaces, profiledPatches.rows(), movedFaces, movedPatches.rows());
     }
     // Clip frames, decoded in order (the teacher's frame numbers).
     if (!args.has("--no-clips")) {
@@ -378,7 +399,7 @@ int run(int argc, char** argv) {
             cv::imwrite(outDir + "/profile_sheet.png", all);
         }
     }
-    std::printf("wrote %s/{faces300w,profiled%s}_{patches.npy,samples.csv}, {faces300w,profiled}_landmarks.npy%s\n", outDir.c_str(),
+    std::printf("wrote %s/{faces300w,profiled,moved%s}_{patches.npy,samples.csv}, {faces300w,profiled,moved}_landmarks.npy%s\n", outDir.c_str(),
                 args.has("--no-clips") ? "" : ",clips", args.has("--no-clips") ? "" : ", contact_sheet.png and profile_sheet.png");
     return 0;
 }

@@ -153,6 +153,37 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
     return copies;
 }
 
+std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+                                           const std::vector<float>& identity, const std::vector<int>& expressions,
+                                           const fit::FaceParams& label, int count, std::mt19937& rng) {
+    constexpr double kMaxHidden = 0.15, kMaxWeight = 0.9;
+    static const std::vector<std::vector<std::string>> kGroups = {
+        {"browDown_L", "browDown_R"}, {"browInnerUp_L", "browInnerUp_R"},
+        {"browInnerUp_L", "browInnerUp_R", "browOuterUp_L", "browOuterUp_R"}, {"mouthPucker"}};
+    const auto& names = model.expressionNames();
+    auto positionOf = [&](const std::string& name) {  // in the label's expressions, or -1
+        for (std::size_t k = 0; k < expressions.size(); ++k) {
+            if (names[static_cast<std::size_t>(expressions[k])] == name) return static_cast<Eigen::Index>(k);
+        }
+        return Eigen::Index{-1};
+    };
+    std::uniform_int_distribution<std::size_t> group(0, kGroups.size() - 1);
+    std::uniform_real_distribution<double> weight(0.0, kMaxWeight);
+    const std::vector<float> photographed = nativeWeights(model, expressions, label.expression);
+    std::vector<ProfiledCopy> copies;
+    for (int n = 0; n < count; ++n) {
+        fit::FaceParams moved = label;
+        const double w = weight(rng);
+        for (const auto& name : kGroups[group(rng)]) {
+            if (const Eigen::Index k = positionOf(name); k >= 0) moved.expression[k] = w;
+        }
+        ProfiledFace face = profileFace(model, source, camera, identity, photographed, label, label,
+                                        nativeWeights(model, expressions, moved.expression));
+        if (face.hidden_share <= kMaxHidden) copies.push_back({std::move(face.image), moved});
+    }
+    return copies;
+}
+
 std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
                                        const std::vector<float>& identity, const std::vector<float>& expression,
                                        const fit::FaceParams& label, double stepDeg) {
@@ -192,14 +223,16 @@ fit::FaceParams turnedBy(const fit::FaceParams& params, double yawDeg) {
 }
 
 ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera, const std::vector<float>& identity,
-                         const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned) {
+                         const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned,
+                         const std::vector<float>& turnedExpression) {
     if (source.empty() || source.depth() != CV_8U || (source.channels() != 1 && source.channels() != 3)) {
         throw Error("profileFace: expected an 8-bit grey or colour image");
     }
     const int width = source.cols, height = source.rows;
     const std::vector<Vec3> vertices = model.vertices(identity, expression);
     const auto triangles = model.triangles();
-    const View from = viewOf(vertices, camera, photographed), to = viewOf(vertices, camera, turned);
+    const View from = viewOf(vertices, camera, photographed);
+    const View to = viewOf(turnedExpression.empty() ? vertices : model.vertices(identity, turnedExpression), camera, turned);
     const double away = awaySign(from, triangles, model.faceVertexCount());
 
     // Which vertices the photograph shows: not behind its z-buffer.

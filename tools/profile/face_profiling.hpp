@@ -44,9 +44,12 @@ struct ProfiledFace {
 /// `identity`: FaceModel::identityCount() values; `expression`: native
 /// weights (expressionNames() order, or empty); `photographed` and `turned`:
 /// poses in the fit's convention (fit/pose.hpp), expressions ignored.
+/// `turnedExpression`: the output face's native weights, when they differ
+/// from the photograph's (the mesh X' of the output then has them).
 /// Throws Error on a source that is not 8-bit grey or colour.
 ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera, const std::vector<float>& identity,
-                         const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned);
+                         const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned,
+                         const std::vector<float>& turnedExpression = {});
 
 struct ProfiledCopy {
     cv::Mat image;
@@ -60,6 +63,18 @@ struct ProfiledCopy {
 std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
                                          const std::vector<float>& identity, const std::vector<float>& expression,
                                          const fit::FaceParams& label, int tries, std::mt19937& rng);
+
+/// `count` copies of a labelled photograph at its own pose with one group of
+/// shapes moved: both brows down, both inner brows up, the whole brows up, or
+/// the lips puckered, to a weight uniform in [0, 0.9] (the label's
+/// `expressions`, native indices in its order, moved alike; copies more than
+/// 15 % hidden dropped). The 68 points barely follow these shapes and the
+/// dense labels' brows barely respond on the clips (docs/expressions.md), so
+/// copies whose shapes moved by a known amount teach a net to read them from
+/// the texture. The label of a copy is the photograph's with the group moved.
+std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+                                           const std::vector<float>& identity, const std::vector<int>& expressions,
+                                           const fit::FaceParams& label, int count, std::mt19937& rng);
 
 /// A head turn as a clip: the photograph at yaw y0 turned, `stepDeg` a frame,
 /// to +80 deg and back to y0, then to -80 deg and back. Each leg stops at its

@@ -12,7 +12,8 @@ from the start's projected landmarks (libfacetrack/src/cnn/landmark_net.hpp), tr
         [--hold-out-clips d3_,d10_]
 
 Trains on the samples whose split is "train" (300-W train crops, their profiled copies turned
-to large yaw, training clips), each epoch all the 300-W and profiled samples and as many clip
+to large yaw, their copies with shapes moved when the folder has them, training clips), each
+epoch all the 300-W samples and copies and as many clip
 samples drawn afresh, half of them mirrored (patch flipped, update mirrored, left and right
 shapes swapped); reports on the 300-W validation crops and their profiled copies; the 300-W
 test crops and the held-out clips (d14, franck) are never read.
@@ -205,12 +206,14 @@ def main():
     os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
 
     loader = load_landmarks if a.landmarks else load
-    faces, profiled, clips = (load_all(loader, a.samples, n, {"train"}) for n in ("faces300w", "profiled", "clips"))
-    sets = [t for t in (faces, profiled, clips) if t is not None]
+    faces, profiled, moved, clips = (load_all(loader, a.samples, n, {"train"}) for n in ("faces300w", "profiled", "moved", "clips"))
+    sets = [t for t in (faces, profiled, moved, clips) if t is not None]
     columns = faces[2]
     x_train = torch.cat([t[0] for t in sets])
     y_train = torch.cat([t[1] for t in sets])
-    n_faces, n_profiled = len(faces[0]), len(profiled[0]) if profiled is not None else 0
+    # The copies, turned or with shapes moved (make_cnn_samples --profiled, --expression-copies), count as one set.
+    n_faces = len(faces[0])
+    n_profiled = sum(len(t[0]) for t in (profiled, moved) if t is not None)
     n_clips = len(clips[0]) if clips is not None else 0
     validation = {}
     for name in ("faces300w", "profiled"):
@@ -240,7 +243,7 @@ def main():
         weight = torch.cat([torch.ones(6), torch.full((y_train.shape[1] - 6,), 0.25)])
     weight = weight / weight.sum()
     output_name = "displacement" if a.landmarks else "update"
-    print(f"training samples: {n_faces} 300-W, {n_profiled} profiled, {n_clips} clip; validation "
+    print(f"training samples: {n_faces} 300-W, {n_profiled} profiled or moved, {n_clips} clip; validation "
           f"{ {k: len(v[0]) for k, v in validation.items()} }; outputs {y_train.shape[1]}", flush=True)
 
     widths = tuple(int(w) for w in a.widths.split(","))
