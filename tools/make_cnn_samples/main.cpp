@@ -181,8 +181,8 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
 /// Copies of a 300-W crop made from its fitted mesh (profile/face_profiling.hpp: turned further, or
 /// with shapes moved), each with its samples and its points carried along; with `tracker`, from
 /// its start on the copy (none: no samples). Returns the copies sampled.
-int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, const std::vector<profile::ProfiledCopy>& copies,
-                  const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches, std::ofstream& samples,
+int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey,
+                  const std::vector<profile::ProfiledCopy>& copies, const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches, std::ofstream& samples,
                   const LandmarkTargets& targets, const TrackerStarts* tracker) {
     const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
     int sampled = 0;
@@ -222,7 +222,8 @@ cv::Mat profiledPair(const FaceModel& model, const cnn::WarpLayout& layout, cons
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
-                             "--expression-sigma", "--profiled", "--expression-copies", "--limit", "--faces300w", "--starts-from", "--max-start-deg"},
+                             "--expression-sigma", "--profiled", "--expression-copies", "--limit", "--faces300w", "--starts-from",
+                             "--max-start-deg"},
                            {"--help", "--no-clips"});
     if (args.has("--help")) {
         std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
@@ -329,7 +330,8 @@ int run(int argc, char** argv) {
             profiledFaces += copySamplesOf(layout, image, grey, turned, perturb, rng, profiledPatches, profiledSamples,
                                            {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
             if (image.split == "train" && moved > 0) {
-                const auto copies = profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng);
+                const auto copies =
+                    profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng);
                 movedFaces += copySamplesOf(layout, image, grey, copies, perturb, rng, movedPatches, movedSamples,
                                             {landmarkBasis, &movedLandmarks}, tracker ? &*tracker : nullptr);
             }
@@ -399,7 +401,8 @@ int run(int argc, char** argv) {
             cv::imwrite(outDir + "/profile_sheet.png", all);
         }
     }
-    std::printf("wrote %s/{faces300w,profiled,moved%s}_{patches.npy,samples.csv}, {faces300w,profiled,moved}_landmarks.npy%s\n", outDir.c_str(),
+    std::printf("wrote %s/{faces300w,profiled,moved%s}_{patches.npy,samples.csv}, {faces300w,profiled,moved}_landmarks.npy%s\n",
+                outDir.c_str(),
                 args.has("--no-clips") ? "" : ",clips", args.has("--no-clips") ? "" : ", contact_sheet.png and profile_sheet.png");
     return 0;
 }
