@@ -182,8 +182,8 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
 /// with shapes moved), each with its samples and its points carried along; with `tracker`, from
 /// its start on the copy (none: no samples). Returns the copies sampled.
 int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey,
-                  const std::vector<profile::ProfiledCopy>& copies, const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches, std::ofstream& samples,
-                  const LandmarkTargets& targets, const TrackerStarts* tracker) {
+                  const std::vector<profile::ProfiledCopy>& copies, const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches,
+                  std::ofstream& samples, const LandmarkTargets& targets, const TrackerStarts* tracker) {
     const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
     int sampled = 0;
     for (std::size_t n = 0; n < copies.size(); ++n) {
