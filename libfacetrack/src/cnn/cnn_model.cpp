@@ -48,7 +48,9 @@ void validate(const CnnModelData& m, const std::string& what) {
         if (!(w >= 0.f && w < 1.f)) throw Error(what + ": corrupt: a neutral weight outside [0, 1)");
     }
     if (m.mirror_averaged && m.stages.empty()) throw Error(what + ": corrupt: mirror averaging without cascade stages");
-    if (m.corrects_fit && !m.expressions_only) throw Error(what + ": corrupt: correcting the fit's shapes is a mode of a stage that reads expressions");
+    if (m.corrects_fit && !m.expressions_only) {
+        throw Error(what + ": corrupt: correcting the fit's shapes is a mode of a stage that reads expressions");
+    }
     for (const auto& s : m.stages) {
         if (s.rounds < 1 || s.rounds > kMaxRounds || s.onnx.empty()) throw Error(what + ": corrupt: a stage");
     }
