@@ -178,13 +178,15 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
     return own;
 }
 
-/// Copies of a 300-W crop made from its fitted mesh (profile/face_profiling.hpp: turned further, or
-/// with shapes moved), each with its samples and its points carried along; with `tracker`, from
-/// its start on the copy (none: no samples). Returns the copies sampled.
-int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey,
-                  const std::vector<profile::ProfiledCopy>& copies, const Perturbation& perturb, std::mt19937& rng, NpyWriter& patches,
-                  std::ofstream& samples, const LandmarkTargets& targets, const TrackerStarts* tracker) {
-    const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+/// What a copy of a 300-W crop is, for its key: "@yaw+40" when turned, "@moved0" when its shapes moved.
+enum class CopyKind { Turned, Moved };
+
+/// Copies of a 300-W crop made from its fitted mesh (profile/face_profiling.hpp), each with its
+/// samples and its points carried along; with `tracker`, from its start on the copy (none: no
+/// samples). Returns the copies sampled.
+int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const fit::Camera& camera,
+                  const std::vector<profile::ProfiledCopy>& copies, CopyKind kind, const Perturbation& perturb, std::mt19937& rng,
+                  NpyWriter& patches, std::ofstream& samples, const LandmarkTargets& targets, const TrackerStarts* tracker) {
     int sampled = 0;
     for (std::size_t n = 0; n < copies.size(); ++n) {
         const profile::ProfiledCopy& copy = copies[n];
@@ -196,9 +198,8 @@ int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
                                                                            layout.anchors.expressions, turned.start_identity))))
             continue;
         char suffix[32];
-        const double yaw = fit::eulerDegrees(copy.label.omega()).y();
-        if (copy.label.pose == image.label.pose) std::snprintf(suffix, sizeof suffix, "@moved%zu", n);
-        else std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", yaw);
+        if (kind == CopyKind::Moved) std::snprintf(suffix, sizeof suffix, "@moved%zu", n);
+        else std::snprintf(suffix, sizeof suffix, "@yaw%+.0f", fit::eulerDegrees(copy.label.omega()).y());
         turned.key += suffix;
         samplesOf(layout, turned, copy.image, perturb, rng, patches, samples, targets);
         ++sampled;
@@ -327,12 +328,12 @@ int run(int argc, char** argv) {
             const auto turned = profile::profiledCopies(*model, grey, camera, identity,
                                                         profile::nativeWeights(*model, layout.anchors.expressions, image.label.expression),
                                                         image.label, profiled, rng);
-            profiledFaces += copySamplesOf(layout, image, grey, turned, perturb, rng, profiledPatches, profiledSamples,
+            profiledFaces += copySamplesOf(layout, image, camera, turned, CopyKind::Turned, perturb, rng, profiledPatches, profiledSamples,
                                            {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
             if (image.split == "train" && moved > 0) {
                 const auto copies =
                     profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng);
-                movedFaces += copySamplesOf(layout, image, grey, copies, perturb, rng, movedPatches, movedSamples,
+                movedFaces += copySamplesOf(layout, image, camera, copies, CopyKind::Moved, perturb, rng, movedPatches, movedSamples,
                                             {landmarkBasis, &movedLandmarks}, tracker ? &*tracker : nullptr);
             }
             if ((i + 1) % 20 == 0) std::fprintf(stderr, "\r300-W: %zu / %zu", i + 1, table.rows.size());

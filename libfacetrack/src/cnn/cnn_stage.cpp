@@ -32,10 +32,7 @@ public:
             const int e = layout_.anchors.expressions[k];
             const bool fitted = std::find(fitExpressions.begin(), fitExpressions.end(), e) != fitExpressions.end();
             const bool read = d.reported.empty() || d.reported[k];
-            if (!d.expressions_only || (read && (!fitted || d.corrects_fit))) {
-                reported_.push_back(static_cast<int>(k));
-                neutralised_.push_back(!fitted);
-            }
+            if (!d.expressions_only || (read && (!fitted || d.corrects_fit))) reported_.push_back({static_cast<int>(k), !fitted});
         }
         if (d.mirror_averaged) mirror_ = updateMirror(d.expressions);
         for (std::size_t i = 0; i < d.stages.size(); ++i) {
@@ -73,7 +70,7 @@ public:
 
     std::vector<int> estimatedExpressions() const override {
         std::vector<int> out;
-        for (const int k : reported_) out.push_back(layout_.anchors.expressions[static_cast<std::size_t>(k)]);
+        for (const Reported& r : reported_) out.push_back(layout_.anchors.expressions[static_cast<std::size_t>(r.position)]);
         return out;
     }
 
@@ -99,10 +96,9 @@ public:
         if (!cascade_->expressionsOnly()) r.pose = fit::headPoseOf(s.params);
         std::vector<float>& native = r.expression->native;
         const std::vector<float>& neutral = cascade_->data().neutral;
-        for (std::size_t i = 0; i < reported_.size(); ++i) {
-            const int k = reported_[i];
+        for (const auto& [k, neutralised] : reported_) {
             float w = static_cast<float>(s.params.expression[k]);
-            if (!neutral.empty() && neutralised_[i]) {
+            if (!neutral.empty() && neutralised) {
                 w = std::clamp((w - neutral[static_cast<std::size_t>(k)]) / (1.f - neutral[static_cast<std::size_t>(k)]), 0.f, 1.f);
             }
             native[static_cast<std::size_t>(layout_.anchors.expressions[static_cast<std::size_t>(k)])] = w;
@@ -135,8 +131,11 @@ private:
     fit::FitBasis landmark_basis_;
     std::optional<PatchNet> landmark_net_;
     std::optional<UpdateMirror> mirror_;
-    std::vector<int> reported_;  ///< the layout's expressions (positions in it) this stage writes
-    std::vector<bool> neutralised_;  ///< per reported_ entry: a reading the neutral applies to, not a correction of the fit's
+    struct Reported {
+        int position;      ///< in the layout's expressions
+        bool neutralised;  ///< a reading the neutral applies to, not a correction of the fit's
+    };
+    std::vector<Reported> reported_;  ///< the expressions this stage writes
 };
 
 }  // namespace
