@@ -224,6 +224,13 @@ TEST(FaceProfiling, ExpressionCopiesMoveOneGroupOfShapesAndCarryTheTextureWithTh
     std::printf("points moved over 2 px: grey difference %.0f carried, %.0f had the image not moved\n", carried, unmoved);
     EXPECT_GT(unmoved, 100.0);  // the test's moves are visible in the texture
     EXPECT_LT(carried, 0.3 * unmoved);
+
+    // Named groups: only those move.
+    for (const auto& copy : profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 6, rng, {"brows_down"})) {
+        EXPECT_EQ(copy.label.expression[0], copy.label.expression[1]);
+        EXPECT_EQ(copy.label.expression.tail(6), label.expression.tail(6));
+    }
+    EXPECT_THROW(profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 1, rng, {"brows_sideways"}), Error);
 }
 
 TEST(FaceProfiling, TurnSequenceGoesOutByTheStepAndComesBack) {

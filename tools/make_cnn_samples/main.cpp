@@ -11,13 +11,15 @@
 //
 //   build/tools/make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb 0] [--clip-perturb N]
 //                                [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1]
-//                                [--expression-sigma 0.1] [--profiled N] [--expression-copies N] [--limit N] [--no-clips]
+//                                [--expression-sigma 0.1] [--profiled N] [--expression-copies N [--copy-groups G,...]]
+//                                [--limit N] [--no-clips]
 //                                [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]
 //
 // With --profiled N, N copies of each 300-W crop turned to a larger yaw by face
 // profiling (profile/face_profiling.hpp) and their samples, in the set "profiled".
 // With --expression-copies N, N copies of each 300-W training crop with its brows or
-// lips moved (profile::expressionCopies) and their samples, in the set "moved".
+// lips moved (profile::expressionCopies) and their samples, in the set "moved"; --copy-groups
+// names the groups of shapes drawn from (profile::expressionCopyGroups; all by default).
 // With --starts-from, the 300-W crops' and copies' starts are perturbed from what
 // the tracker (LBF, fit and that cascade, or LBF and fit alone for "fit"; mean
 // identity) says of each image rather than from the label: what the landmark net,
@@ -58,6 +60,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <sstream>
 
 using namespace facetrack;
 using facetrack::tools::NpyWriter;
@@ -224,12 +227,12 @@ int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
                              "--expression-sigma", "--profiled", "--expression-copies", "--limit", "--faces300w", "--starts-from",
-                             "--max-start-deg"},
+                             "--max-start-deg", "--copy-groups"},
                            {"--help", "--no-clips"});
     if (args.has("--help")) {
         std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
                   "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
-                  "       [--profiled N] [--expression-copies N] [--limit N] [--faces300w DIR] [--no-clips]\n"
+                  "       [--profiled N] [--expression-copies N [--copy-groups G,...]] [--limit N] [--faces300w DIR] [--no-clips]\n"
                   "       [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]");
         return 0;
     }
@@ -248,6 +251,9 @@ int run(int argc, char** argv) {
     if (perturb.count < 0 || clipPerturb.count < 0 || profiled < 0 || moved < 0) {
         throw Error("--perturb, --clip-perturb, --profiled and --expression-copies must not be negative");
     }
+    std::vector<std::string> copyGroups;
+    std::stringstream groupList(args.get("--copy-groups", ""));
+    for (std::string g; std::getline(groupList, g, ',');) copyGroups.push_back(g);  // expressionCopies checks each name
     std::filesystem::create_directories(outDir);
 
     const auto model = FaceModel::loadDefault();  // with the landmark convention, as the tracker and the landmark net run
@@ -332,7 +338,7 @@ int run(int argc, char** argv) {
                                            {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
             if (image.split == "train" && moved > 0) {
                 const auto copies =
-                    profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng);
+                    profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng, copyGroups);
                 movedFaces += copySamplesOf(layout, image, camera, copies, CopyKind::Moved, perturb, rng, movedPatches, movedSamples,
                                             {landmarkBasis, &movedLandmarks}, tracker ? &*tracker : nullptr);
             }

@@ -2,7 +2,8 @@
 // ONNX exports of tools/train_cnn/train_stage.py (issue 17, docs/cnn.md).
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
-//                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv] [--min-validation-r R]]
+//                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv | --rest-from-validation]
+//                                            [--min-validation-r R]]
 //                        [--mirror-average] [--corrects-fit]
 //                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
@@ -18,7 +19,11 @@
 // --expressions-only: the nets were trained to read expressions (train_stage.py --expressions);
 // the stage keeps the fit's pose and the shapes the fit estimates (cnn_model_data.hpp).
 // --neutral-from: each expression's neutral w0, the median of its dense label over the file's
-// training rows (cnn_model_data.hpp says why). --min-validation-r: only the expressions whose
+// training rows (cnn_model_data.hpp says why). --rest-from-validation: each expression's neutral is
+// instead its rest level on the 300-W validation crops, how high the net reads it on faces that do
+// not show it (the trainer's OUT.validation_rest.txt beside the last net: the estimate's 0.9
+// quantile over the crops whose label is at most the median; a pair's mean), so that a relaxed
+// face reads 0 on nine in ten such faces. --min-validation-r: only the expressions whose
 // estimate agreed with the labels on the 300-W validation crops by at least R (Pearson, the mean of
 // a left / right pair; the trainer's OUT.validation_r.txt beside the net) are reported.
 // --mirror-average: the stages read each patch and its mirror image and apply the mean update
@@ -84,28 +89,28 @@ std::vector<std::string> expressionColumns(const std::string& onnxPath) {
     return {names.begin() + static_cast<std::ptrdiff_t>(pose.size()), names.end()};
 }
 
-/// Per expression, whether its validation r (the trainer's OUT.validation_r.txt beside the last
-/// net), averaged over its left / right pair, reaches `minimum`.
-std::vector<bool> agreeing(const std::string& onnxPath, const std::vector<std::string>& names, double minimum) {
-    const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + ".validation_r.txt";
+/// Per expression, the value the trainer's OUT.SUFFIX beside the last net gives it (lines "name
+/// value"), averaged over its left / right pair so that a face and its mirror image are treated alike.
+std::vector<double> pairAveraged(const std::string& onnxPath, const std::string& suffix, const std::vector<std::string>& names) {
+    const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + suffix;
     std::stringstream lines(readBytes(path));
-    std::map<std::string, double> r;
-    std::string name, value;
-    while (lines >> name >> value) r[name] = std::stod(value);  // "nan" too: a constant label
+    std::map<std::string, double> value;
+    std::string name, text;
+    while (lines >> name >> text) value[name] = std::stod(text);  // "nan" too: a constant label
     const auto of = [&](const std::string& n) {
-        const auto it = r.find(n);
-        if (it == r.end()) throw Error(path + " has no " + n);
+        const auto it = value.find(n);
+        if (it == value.end()) throw Error(path + " has no " + n);
         return std::isfinite(it->second) ? it->second : 0.0;
     };
-    std::vector<bool> keep;
+    std::vector<double> out;
     for (const auto& n : names) {
         std::string pair = n;
         for (const auto& [a, b] : {std::pair<std::string, std::string>{"_L", "_R"}, {"_R", "_L"}}) {
             if (n.size() > 2 && n.compare(n.size() - 2, 2, a) == 0) pair = n.substr(0, n.size() - 2) + b;
         }
-        keep.push_back(0.5 * (of(n) + of(pair)) >= minimum);
+        out.push_back(0.5 * (of(n) + of(pair)));
     }
-    return keep;
+    return out;
 }
 
 /// Per name, the median of its column over the table's training rows.
@@ -128,11 +133,11 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from",
                                                                                                   "--min-validation-r", "--refiner", "--sides", "--base"},
-                           {"--help", "--expressions-only", "--mirror-average", "--corrects-fit"});
+                           {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation"});
     if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
         std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
                   "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
-                  "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit]");
+                  "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = split(args.get("--nets", ""));
@@ -177,16 +182,26 @@ int run(int argc, char** argv) {
         cnn::PatchNet check(model.landmark_net, model.patch_size, cnn::kLandmarkOutputs, path);
         std::printf("landmark net: %s, %zu bytes\n", path.c_str(), model.landmark_net.size());
     }
-    if (args.has("--neutral-from")) {
-        if (!model.expressions_only) throw Error("--neutral-from goes with --expressions-only");
-        model.neutral = trainingMedians(args.get("--neutral-from"), model.expressions);
+    if (args.has("--neutral-from") && args.has("--rest-from-validation")) throw Error("--neutral-from or --rest-from-validation, not both");
+    if (args.has("--neutral-from") || args.has("--rest-from-validation")) {
+        if (!model.expressions_only) throw Error("--neutral-from and --rest-from-validation go with --expressions-only");
+        model.neutral.clear();
+        if (args.has("--neutral-from")) {
+            model.neutral = trainingMedians(args.get("--neutral-from"), model.expressions);
+        } else {
+            if (nets.empty()) throw Error("--rest-from-validation needs the nets (--nets)");
+            for (const double level : pairAveraged(nets.back(), ".validation_rest.txt", model.expressions))
+                model.neutral.push_back(std::clamp(static_cast<float>(level), 0.f, 0.9f));
+        }
         for (std::size_t k = 0; k < model.neutral.size(); ++k) {
             if (model.neutral[k] >= 0.05f) std::printf("neutral %s %.3f\n", model.expressions[k].c_str(), model.neutral[k]);
         }
     }
     if (args.has("--min-validation-r")) {
         if (!model.expressions_only) throw Error("--min-validation-r goes with --expressions-only");
-        model.reported = agreeing(nets.back(), model.expressions, args.number("--min-validation-r", 0.5));
+        const double minimum = args.number("--min-validation-r", 0.5);
+        model.reported.clear();
+        for (const double r : pairAveraged(nets.back(), ".validation_r.txt", model.expressions)) model.reported.push_back(r >= minimum);
         std::printf("reported:");
         for (std::size_t k = 0; k < model.reported.size(); ++k) {
             if (model.reported[k]) std::printf(" %s", model.expressions[k].c_str());

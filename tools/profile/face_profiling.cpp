@@ -155,11 +155,21 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
 
 std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
                                            const std::vector<float>& identity, const std::vector<int>& expressions,
-                                           const fit::FaceParams& label, int count, std::mt19937& rng) {
+                                           const fit::FaceParams& label, int count, std::mt19937& rng,
+                                           const std::vector<std::string>& groups) {
     constexpr double kMaxHidden = 0.15, kMaxWeight = 0.9;
-    static const std::vector<std::vector<std::string>> kGroups = {
-        {"browDown_L", "browDown_R"}, {"browInnerUp_L", "browInnerUp_R"},
-        {"browInnerUp_L", "browInnerUp_R", "browOuterUp_L", "browOuterUp_R"}, {"mouthPucker"}};
+    static const std::map<std::string, std::vector<std::string>> kGroups = {
+        {"brows_down", {"browDown_L", "browDown_R"}},
+        {"inner_brows_up", {"browInnerUp_L", "browInnerUp_R"}},
+        {"brows_up", {"browInnerUp_L", "browInnerUp_R", "browOuterUp_L", "browOuterUp_R"}},
+        {"pucker", {"mouthPucker"}}};
+    std::vector<const std::vector<std::string>*> drawn;
+    for (const auto& [name, shapes] : kGroups) {
+        if (groups.empty() || std::find(groups.begin(), groups.end(), name) != groups.end()) drawn.push_back(&shapes);
+    }
+    for (const auto& name : groups) {
+        if (!kGroups.count(name)) throw Error("expressionCopies: no group of shapes is called '" + name + "'");
+    }
     const auto& names = model.expressionNames();
     auto positionOf = [&](const std::string& name) {  // in the label's expressions, or -1
         for (std::size_t k = 0; k < expressions.size(); ++k) {
@@ -167,14 +177,14 @@ std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat
         }
         return Eigen::Index{-1};
     };
-    std::uniform_int_distribution<std::size_t> group(0, kGroups.size() - 1);
+    std::uniform_int_distribution<std::size_t> group(0, drawn.size() - 1);
     std::uniform_real_distribution<double> weight(0.0, kMaxWeight);
     const std::vector<float> photographed = nativeWeights(model, expressions, label.expression);
     std::vector<ProfiledCopy> copies;
     for (int n = 0; n < count; ++n) {
         fit::FaceParams moved = label;
         const double w = weight(rng);
-        for (const auto& name : kGroups[group(rng)]) {
+        for (const auto& name : *drawn[group(rng)]) {
             if (const Eigen::Index k = positionOf(name); k >= 0) moved.expression[k] = w;
         }
         ProfiledFace face = profileFace(model, source, camera, identity, photographed, label, label,

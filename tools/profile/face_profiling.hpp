@@ -32,6 +32,7 @@
 #include <Eigen/Core>
 
 #include <random>
+#include <string>
 #include <vector>
 
 namespace facetrack::profile {
@@ -65,16 +66,19 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
                                          const fit::FaceParams& label, int tries, std::mt19937& rng);
 
 /// `count` copies of a labelled photograph at its own pose with one group of
-/// shapes moved: both brows down, both inner brows up, the whole brows up, or
-/// the lips puckered, to a weight uniform in [0, 0.9] (the label's
+/// shapes moved (one of `groups`, drawn alike; all of them when empty: "brows_down"
+/// browDown_L/R, "inner_brows_up" browInnerUp_L/R, "brows_up" browInnerUp and
+/// browOuterUp, both sides, "pucker" mouthPucker) to a weight uniform in [0, 0.9] (the label's
 /// `expressions`, native indices in its order, moved alike; copies more than
 /// 15 % hidden dropped). The 68 points barely follow these shapes and the
 /// dense labels' brows barely respond on the clips (docs/expressions.md), so
 /// copies whose shapes moved by a known amount teach a net to read them from
 /// the texture. The label of a copy is the photograph's with the group moved.
+/// Throws Error for a group name it does not know.
 std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
                                            const std::vector<float>& identity, const std::vector<int>& expressions,
-                                           const fit::FaceParams& label, int count, std::mt19937& rng);
+                                           const fit::FaceParams& label, int count, std::mt19937& rng,
+                                           const std::vector<std::string>& groups = {});
 
 /// A head turn as a clip: the photograph at yaw y0 turned, `stepDeg` a frame,
 /// to +80 deg and back to y0, then to -80 deg and back. Each leg stops at its

@@ -96,6 +96,34 @@ def write_agreement(out, agreement):
             f.write(f"{n} {r:.4f}\n")
 
 
+# The share of faces at rest whose estimate stays under the rest level below.
+REST_QUANTILE = 0.9
+
+
+def rest_levels(pred, update, labels, names):
+    """Per expression, how high the estimate reads on faces that do not show the shape: its 0.9
+    quantile over the crops whose label is at most the label's median there."""
+    estimate = (labels - update[:, 6:] + pred[:, 6:]).clamp(0, 1)
+    out = {}
+    for k, n in enumerate(names):
+        at_rest = labels[:, k] <= labels[:, k].median()
+        out[n] = estimate[at_rest, k].quantile(REST_QUANTILE).item()
+    return out
+
+
+def write_rest_levels(out, levels):
+    """OUT.validation_rest.txt: per expression, its rest level on the 300-W validation crops
+    (pack_cnn --rest-from makes it the shape's neutral)."""
+    with open(out + ".validation_rest.txt", "w") as f:
+        for n, v in levels.items():
+            f.write(f"{n} {v:.4f}\n")
+
+
+def predict(net, x, scale):
+    with torch.no_grad():
+        return torch.cat([net(x[i:i + 512]) for i in range(0, len(x), 512)]) * scale
+
+
 def load_landmarks(samples_dir, name, splits):
     """Patches and landmark displacements (make_cnn_samples' OUT/NAME_landmarks.npy) of the samples in `splits`."""
     path = os.path.join(samples_dir, name + "_landmarks.npy")
@@ -259,6 +287,10 @@ def main():
         # which must be the training run's --samples).
         export(net, a.out + ".onnx", state.get("scale", scale), output_name)
         write_columns(a.out, columns)
+        if a.expressions and "faces300w" in validation:
+            net.eval()
+            x_val, y_val, labels_val = validation["faces300w"]
+            write_rest_levels(a.out, rest_levels(predict(net, x_val, state.get("scale", scale)), y_val, labels_val, columns[6:]))
         print(f"wrote {a.out}.onnx", flush=True)
         return
     if a.resume and os.path.exists(a.out + ".pt"):
@@ -298,7 +330,7 @@ def main():
         score = float("inf")
         with torch.no_grad():
             for name, (x_val, y_val, labels_val) in validation.items():
-                pred = torch.cat([net(x_val[i:i + 512]) for i in range(0, len(x_val), 512)]) * scale
+                pred = predict(net, x_val, scale)
                 if a.landmarks:  # mean point distance, patch pixels
                     before = y_val.view(len(y_val), -1, 2).norm(dim=2).mean().item()
                     after = (pred - y_val).view(len(y_val), -1, 2).norm(dim=2).mean().item()
@@ -319,6 +351,7 @@ def main():
                         line += " r " + " ".join(f"{n} {agreement[n]:.2f}" for n in ("browDown_L", "browInnerUp_L", "mouthPucker", "mouthFunnel"))
                         if score < best:
                             write_agreement(a.out, agreement)
+                            write_rest_levels(a.out, rest_levels(pred, y_val, labels_val, columns[6:]))
                 line += (f" {name}: rotation {rot_before.mean():.2f} -> {rot_after.mean():.2f} deg (within 3 deg "
                          f"{(rot_before < 3).float().mean() * 100:.0f} -> {(rot_after < 3).float().mean() * 100:.0f} %), "
                          f"centre {shift_before:.2f} -> {shift_after:.2f} % of depth, expression MAE {expr_before:.4f} -> {expr_after:.4f};")

@@ -26,10 +26,12 @@ struct CnnModelData {
     /// answers (make_cnn_samples --starts-from fit), so for those shapes the update is a correction
     /// of the fit, not a reading from nothing. Format version 7.
     bool corrects_fit = false;
-    /// Per expression (empty: none), the teacher labels' value on a typical face, w0: the median
-    /// over the 300-W training crops. The stage reports (w - w0) / (1 - w0), clamped to [0, 1]:
-    /// the labels read browDown 0.23 on the median face, and a net trained on them does the same
-    /// on a relaxed one (docs/cnn.md). Format version 3.
+    /// Per expression (empty: none), w0, what the net reads on a face that does not show the shape.
+    /// The stage reports (w - w0) / (1 - w0), clamped to [0, 1]: the labels read browDown 0.23 on
+    /// the median face, and a net trained on them does the same on a relaxed one (docs/cnn.md).
+    /// pack_cnn sets it to the labels' median over the 300-W training crops (--neutral-from), or to
+    /// the net's rest level on the validation crops (--rest-from-validation), which also keeps its
+    /// noise on relaxed faces out. Format version 3.
     std::vector<float> neutral;
     /// Per expression (empty: all), whether an expressions-only stage reports it: the packer keeps
     /// those whose estimate agreed with the labels on the validation crops (docs/cnn.md). Version 3.
