@@ -43,8 +43,8 @@ and shows the image with landmarks, mesh and gaze next to the avatar.
   --screenshot PNG      save the last frame's window content
   --msaa N              antialiasing samples (default 4 on a GPU, 0 on a software renderer)
 tracking options: --detector, --yunet, --min-score, --max-faces, --fov, --focal,
-  --calibration-frames, --expression-prior, --filter-cutoff, --filter-beta, --no-filter
-  (as in 'facetrack track')
+  --calibration-frames, --expression-prior, --filter-cutoff, --filter-beta, --no-filter,
+  --no-cnn-stage (as in 'facetrack track')
 
 keys: space pause, r reset identity calibration, m mirror, q or Esc quit
 )";
@@ -103,7 +103,7 @@ bool reopenCamera(tools::MediaReader& reader, const CaptureSettings& settings) {
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot", "--msaa"}),
-                           {"--help", "--headless", "--no-filter"});
+                           tools::trackingFlags({"--help", "--headless"}));
     if (args.has("--help")) {
         std::fputs(kUsage, stdout);
         return 0;

@@ -635,5 +635,43 @@ TEST(Tracker, SaysWhichShapesItEstimatesAndTheOthersStayZero) {
     EXPECT_EQ(std::count(fewer.begin(), fewer.end(), "eyeLookInLeft"), 0);
 }
 
+// The shipped CNN file's expression stage adds the frown, which the landmarks do not see;
+// TrackerConfig::cnn_stage = false takes it out and says so, and leaves the rest as they were.
+TEST(Tracker, TheCnnStageSwitchTakesOutTheShapesOnlyItReads) {
+    FACETRACK_REQUIRE_PIPELINE();
+    const Models models = Models::loadDefault();
+    if (!models.cnn || !models.cnn->hasCascade()) GTEST_SKIP() << "the CNN file has no cascade stages";
+    TrackerConfig off;
+    off.cnn_stage = false;
+    Tracker with(models), without(models, off);
+    const auto on = with.estimatedShapes(), fewer = without.estimatedShapes();
+    EXPECT_EQ(std::count(on.begin(), on.end(), "browDownLeft"), 1);
+    EXPECT_EQ(std::count(fewer.begin(), fewer.end(), "browDownLeft"), 0);
+    for (const auto& name : fewer) EXPECT_EQ(std::count(on.begin(), on.end(), name), 1) << name;
+    EXPECT_GT(on.size(), fewer.size());
+    const auto stage = [](const Tracker& t) {
+        for (const auto& s : t.stages()) {
+            if (s.name == "cnn") return s;
+        }
+        return StageInfo{};
+    };
+    EXPECT_TRUE(stage(with).available);
+    EXPECT_FALSE(stage(without).available);
+    EXPECT_NE(stage(without).detail.find("TrackerConfig::cnn_stage"), std::string::npos) << stage(without).detail;
+    // Frame by frame the fit's jawOpen reads the same either way; the frown stays 0 without the stage.
+    const auto frames = clipFrames(6);
+    FrameResult a, b;
+    const auto browDown = static_cast<std::size_t>(arkitIndex("browDownLeft"));
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        with.process(core::viewOf(frames[i]), i / 25.0, a);
+        without.process(core::viewOf(frames[i]), i / 25.0, b);
+        ASSERT_EQ(a.faces.size(), 1u);
+        ASSERT_EQ(b.faces.size(), 1u);
+        EXPECT_EQ(b.faces[0].expression->arkit[browDown], 0.f);
+        EXPECT_EQ(a.faces[0].expression->arkit[static_cast<std::size_t>(arkitIndex("jawOpen"))],
+                  b.faces[0].expression->arkit[static_cast<std::size_t>(arkitIndex("jawOpen"))]);
+    }
+}
+
 }  // namespace
 }  // namespace facetrack

@@ -49,6 +49,8 @@ static void checkErrorsAndNulls(const ft_models* models) {
     config.landmark_starts = 10;
     CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_ERROR && tracker == NULL);
     CHECK(strstr(error, "landmark_starts") != NULL);
+    ft_tracker_config_init(&config);
+    CHECK(config.cnn_stage == 1);
     /* An older caller, whose config ends before landmark_starts: the default, not the garbage after its struct. */
     config.struct_size = (uint32_t)offsetof(ft_tracker_config, landmark_starts);
     CHECK(ft_tracker_create(models, &config, &tracker, error, sizeof error) == FT_OK && tracker != NULL);
@@ -137,6 +139,7 @@ int main(void) {
         CHECK(ft_tracker_estimated_shapes(tracker, estimated) == FT_OK);
         CHECK(estimated[17] == 1);  /* jawOpen: the fit's */
         CHECK(estimated[51] == 0);  /* tongueOut: nothing estimates it */
+        CHECK(estimated[41] == 1);  /* browDownLeft: the shipped CNN file's expression stage */
         CHECK(ft_tracker_estimated_shapes(NULL, estimated) == FT_INVALID_ARGUMENT);
         CHECK(ft_tracker_estimated_shapes(tracker, NULL) == FT_INVALID_ARGUMENT);
     }

@@ -31,6 +31,7 @@ TrackerConfig trackerConfig(const Args& args) {
     config.expression_prior = static_cast<float>(args.number("--expression-prior", config.expression_prior));
     config.landmark_starts = args.integer("--landmark-starts", config.landmark_starts);
     config.filter.enabled = !args.has("--no-filter");
+    config.cnn_stage = !args.has("--no-cnn-stage");
     config.filter.min_cutoff_hz = args.number("--filter-cutoff", config.filter.min_cutoff_hz);
     config.filter.beta = args.number("--filter-beta", config.filter.beta);
     if (!(config.filter.min_cutoff_hz > 0.0) || !(config.filter.beta >= 0.0)) {
@@ -56,6 +57,11 @@ Models trackingModels(const Args& args) {
 std::set<std::string> trackingOptions(std::set<std::string> more) {
     more.insert(kDetectorOptions.begin(), kDetectorOptions.end());
     more.insert(kTrackerOptions.begin(), kTrackerOptions.end());
+    return more;
+}
+
+std::set<std::string> trackingFlags(std::set<std::string> more) {
+    more.insert(kTrackerFlags.begin(), kTrackerFlags.end());
     return more;
 }
 

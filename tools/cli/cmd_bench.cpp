@@ -25,7 +25,7 @@ Tracker options as for 'facetrack track'.)";
 }  // namespace
 
 int runBench(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--frames", "--size", "--plot"}), {"--help", "--no-filter"});
+    const Args args(argv, trackingOptions({"--frames", "--size", "--plot"}), trackingFlags({"--help"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;

@@ -271,7 +271,8 @@ NeutralFigures reportSegments(const std::vector<Segment>& segments, const std::m
 }  // namespace
 
 int runEvalExpressions(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--labels", "--plot", "--dense"}), {"--help", "--no-filter", "--no-mirror", "--calibrate-neutral"});
+    const Args args(argv, trackingOptions({"--labels", "--plot", "--dense"}),
+                    trackingFlags({"--help", "--no-mirror", "--calibrate-neutral"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;

@@ -196,7 +196,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
 }  // namespace
 
 int runEvalGaze(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic"}), {"--help", "--no-filter", "--bare-faces"});
+    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic"}), trackingFlags({"--help", "--bare-faces"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;

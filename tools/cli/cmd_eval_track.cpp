@@ -146,7 +146,7 @@ void printRow(const char* method, const Track& track, double seconds, const Teac
 }  // namespace
 
 int runEvalTrack(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--frames", "--size", "--dlib"}), {"--help", "--no-filter"});
+    const Args args(argv, trackingOptions({"--frames", "--size", "--dlib"}), trackingFlags({"--help"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;

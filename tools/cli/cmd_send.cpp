@@ -69,7 +69,7 @@ std::unique_ptr<FrameSource> openSource(const Args& args, const CaptureSettings&
 
 int runSend(const std::vector<std::string>& argv) {
     const Args args(argv, trackingOptions({"--camera", "--input", "--protocol", "--to", "--listen-port", "--frames", "--size", "--fps"}),
-                    {"--help", "--no-filter", "--fast"});
+                    trackingFlags({"--help", "--fast"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;

@@ -40,7 +40,7 @@ inline std::string clipPath(const std::string& shared, const std::string& clip) 
 using tools::Args;
 using tools::detectorConfig;
 using tools::kDetectorOptions;
-using tools::kTrackerFlags;
+using tools::trackingFlags;
 using tools::kTrackerOptions;
 using tools::trackerConfig;
 using tools::trackingOptions;

@@ -8,7 +8,7 @@ from the start's projected landmarks (libfacetrack/src/cnn/landmark_net.hpp), tr
 300-W crops and their profiled copies (the clips have no annotated points).
 
   /usr/bin/python3 tools/train_cnn/train_stage.py [--samples build/cnn_samples]
-        [--out build/cnn/stage1] [--minutes 30] [--resume] [--landmarks | --expressions]
+        [--out build/cnn/stage1] [--minutes 30] [--epochs N] [--resume] [--landmarks | --expressions]
         [--hold-out-clips d3_,d10_]
 
 Trains on the samples whose split is "train" (300-W train crops, their profiled copies turned
@@ -214,6 +214,8 @@ def main():
     p.add_argument("--samples", default="build/cnn_samples", help="make_cnn_samples' folder, or several, comma-separated")
     p.add_argument("--out", default="build/cnn/stage1")
     p.add_argument("--minutes", type=float, default=30)
+    p.add_argument("--epochs", type=int, default=0,
+                   help="stop after this many epochs (with --resume, counted from the start); 0: by --minutes only")
     p.add_argument("--batch", type=int, default=128)
     p.add_argument("--resume", action="store_true")
     p.add_argument("--export-only", action="store_true", help="export OUT.pt's net (e.g. while it trains) and stop")
@@ -300,7 +302,7 @@ def main():
         print(f"resumed at epoch {epoch}", flush=True)
     log = open(a.out + ".log", "a")
     deadline = started + 60 * a.minutes
-    while time.time() < deadline:
+    while time.time() < deadline and (a.epochs <= 0 or epoch < a.epochs):
         net.train()
         # All 300-W and profiled samples, and as many clip samples as 300-W ones (the clips are 8
         # people, their frames alike).

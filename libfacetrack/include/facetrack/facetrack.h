@@ -80,6 +80,9 @@ typedef struct ft_tracker_config {
     int32_t calibration_frames;   /* identity from this many samples; 0: mean face (30) */
     float expression_prior;       /* factor on the fit's learned expression prior, (0, 100] (1) */
     int32_t landmark_starts;      /* landmark passes averaged, 1..9; each ~0.2 ms (3) */
+    /* Added after the first release of this struct: an older caller's struct_size ends before it
+       and it keeps its default. */
+    int32_t cnn_stage;            /* the CNN file's cascade stages: the shipped expression net, ~0.3 ms (1) */
 } ft_tracker_config;
 
 typedef struct ft_timing {

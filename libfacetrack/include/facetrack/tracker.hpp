@@ -99,6 +99,11 @@ struct TrackerConfig {
     /// (docs/landmarks.md). Three, because the landmark refiner after them
     /// steadies the points too; without the CNN file five jitter less.
     int landmark_starts = 3;
+    /// Run the CNN file's cascade stages (the "cnn" stage). The shipped file's
+    /// reads nine ARKit shapes the landmarks do not see (browDown, cheekPuff,
+    /// cheekSquint, mouthShrug, mouthStretch; docs/cnn.md) in about 0.3 ms a
+    /// frame on one core; false leaves them at 0 and the file's refiners only.
+    bool cnn_stage = true;
 };
 
 /// Throws Error naming the first field of `config` out of range, as the Tracker's

@@ -110,6 +110,7 @@ void ft_tracker_config_init(ft_tracker_config* config) {
     config->calibration_frames = defaults.calibration_frames;
     config->expression_prior = defaults.expression_prior;
     config->landmark_starts = defaults.landmark_starts;
+    config->cnn_stage = defaults.cnn_stage ? 1 : 0;
 }
 
 ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* config, ft_tracker** out, char* error,
@@ -142,6 +143,7 @@ ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* co
         t.calibration_frames = c.calibration_frames;
         t.expression_prior = c.expression_prior;
         t.landmark_starts = c.landmark_starts;
+        t.cnn_stage = c.cnn_stage != 0;
         *out = new ft_tracker{facetrack::Tracker(models->models, t), {}, {}};
     });
     writeError(error, error_size, message);

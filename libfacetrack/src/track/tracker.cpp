@@ -73,7 +73,8 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind(), config.landmark_starts));
     stages.push_back(cnn::makeRefineStage(models.cnn, stages.back().get()));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}, models.landmarks != nullptr));
-    stages.push_back(cnn::makeCnnStage(models.cnn, models.face, stages.back().get()));
+    stages.push_back(config.cnn_stage ? cnn::makeCnnStage(models.cnn, models.face, stages.back().get())
+                                      : pipeline::notAvailable("cnn", "off (TrackerConfig::cnn_stage)"));
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
     // The gaze stage's eye shapes have their own temporal estimate: the filter leaves them as they are.
     const pipeline::Stage& gazeStage = *stages.back();
