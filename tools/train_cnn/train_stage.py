@@ -113,7 +113,7 @@ def rest_levels(pred, update, labels, names):
 
 def write_rest_levels(out, levels):
     """OUT.validation_rest.txt: per expression, its rest level on the 300-W validation crops
-    (pack_cnn --rest-from makes it the shape's neutral)."""
+    (pack_cnn --rest-from-validation makes it the shape's neutral)."""
     with open(out + ".validation_rest.txt", "w") as f:
         for n, v in levels.items():
             f.write(f"{n} {v:.4f}\n")
