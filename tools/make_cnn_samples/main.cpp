@@ -338,7 +338,8 @@ int run(int argc, char** argv) {
                                            {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
             if (image.split == "train" && moved > 0) {
                 const auto copies =
-                    profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng, copyGroups);
+                    profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng,
+                                              copyGroups);
                 movedFaces += copySamplesOf(layout, image, camera, copies, CopyKind::Moved, perturb, rng, movedPatches, movedSamples,
                                             {landmarkBasis, &movedLandmarks}, tracker ? &*tracker : nullptr);
             }
