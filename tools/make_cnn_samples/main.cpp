@@ -19,7 +19,7 @@
 // profiling (profile/face_profiling.hpp) and their samples, in the set "profiled".
 // With --expression-copies N, N copies of each 300-W training crop with its brows or
 // lips moved (profile::expressionCopies) and their samples, in the set "moved"; --copy-groups
-// names the groups of shapes drawn from (profile::expressionCopyGroups; all by default).
+// names the groups of shapes drawn from (profile::expressionCopies; all by default).
 // With --starts-from, the 300-W crops' and copies' starts are perturbed from what
 // the tracker (LBF, fit and that cascade, or LBF and fit alone for "fit"; mean
 // identity) says of each image rather than from the label: what the landmark net,
@@ -60,7 +60,6 @@
 #include <memory>
 #include <optional>
 #include <random>
-#include <sstream>
 
 using namespace facetrack;
 using facetrack::tools::NpyWriter;
@@ -251,9 +250,7 @@ int run(int argc, char** argv) {
     if (perturb.count < 0 || clipPerturb.count < 0 || profiled < 0 || moved < 0) {
         throw Error("--perturb, --clip-perturb, --profiled and --expression-copies must not be negative");
     }
-    std::vector<std::string> copyGroups;
-    std::stringstream groupList(args.get("--copy-groups", ""));
-    for (std::string g; std::getline(groupList, g, ',');) copyGroups.push_back(g);  // expressionCopies checks each name
+    const std::vector<std::string> copyGroups = tools::splitList(args.get("--copy-groups", ""));  // expressionCopies checks each name
     std::filesystem::create_directories(outDir);
 
     const auto model = FaceModel::loadDefault();  // with the landmark convention, as the tracker and the landmark net run
