@@ -46,6 +46,7 @@
 #include "cnn/landmark_net.hpp"
 #include "cnn/update_net.hpp"
 #include "facetrack/face_model.hpp"
+#include "fit/fit_basis.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -57,13 +58,6 @@
 using namespace facetrack;
 
 namespace {
-
-std::vector<std::string> split(const std::string& list) {
-    std::vector<std::string> out;
-    std::stringstream s(list);
-    for (std::string item; std::getline(s, item, ',');) out.push_back(item);
-    return out;
-}
 
 std::string readBytes(const std::string& path) { return core::readFileBytes(path, "'" + path + "'"); }
 
@@ -90,7 +84,8 @@ std::vector<std::string> expressionColumns(const std::string& onnxPath) {
 }
 
 /// Per expression, the value the trainer's OUT.SUFFIX beside the last net gives it (lines "name
-/// value"), averaged over its left / right pair so that a face and its mirror image are treated alike.
+/// value"), averaged with its mirror partner's (fit::mirrorName: browDown_L and browDown_R, jawLeft
+/// and jawRight) so that a face and its mirror image are treated alike.
 std::vector<double> pairAveraged(const std::string& onnxPath, const std::string& suffix, const std::vector<std::string>& names) {
     const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + suffix;
     std::stringstream lines(readBytes(path));
@@ -104,11 +99,8 @@ std::vector<double> pairAveraged(const std::string& onnxPath, const std::string&
     };
     std::vector<double> out;
     for (const auto& n : names) {
-        std::string pair = n;
-        for (const auto& [a, b] : {std::pair<std::string, std::string>{"_L", "_R"}, {"_R", "_L"}}) {
-            if (n.size() > 2 && n.compare(n.size() - 2, 2, a) == 0) pair = n.substr(0, n.size() - 2) + b;
-        }
-        out.push_back(0.5 * (of(n) + of(pair)));
+        const std::string partner = fit::mirrorName(n);
+        out.push_back(0.5 * (of(n) + of(partner.empty() ? n : partner)));
     }
     return out;
 }
@@ -140,8 +132,8 @@ int run(int argc, char** argv) {
                   "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation]");
         return args.has("--help") ? 0 : 2;
     }
-    const auto nets = split(args.get("--nets", ""));
-    auto rounds = split(args.get("--rounds", ""));
+    const auto nets = tools::splitList(args.get("--nets", ""));
+    auto rounds = tools::splitList(args.get("--rounds", ""));
     if (rounds.empty()) rounds.assign(nets.size(), "1");
     if (rounds.size() != nets.size()) throw Error("--rounds needs one count per net");
 
