@@ -45,6 +45,30 @@ TEST(Cli, InfoNamesModelsDetectorAndStages) {
     EXPECT_NE(run.out.find("cnn        expressions only ("), std::string::npos);  // the shipped expression stage
 }
 
+TEST(Cli, InfoDescribesTheTrackerTheOptionsMake) {
+    const CliRun shipped = runCli("info"), off = runCli("info --no-cnn-stage --eyes none");
+    ASSERT_EQ(shipped.exit_code, 0) << shipped.err;
+    ASSERT_EQ(off.exit_code, 0) << off.err;
+    EXPECT_NE(off.out.find("cnn        not available: off (TrackerConfig::cnn_stage)"), std::string::npos) << off.out;
+    EXPECT_NE(off.out.find("gaze       not available: no eye model given"), std::string::npos) << off.out;
+    // The expression stage's and the gaze stage's shapes are no longer estimated.
+    const auto estimated = [](const std::string& out) {
+        const auto from = out.find("ARKit shapes estimated"), to = out.find("always 0 with these models");
+        return out.substr(from, to - from);
+    };
+    if (shipped.out.find("gaze       not available") == std::string::npos) {
+        EXPECT_NE(estimated(shipped.out).find("eyeLookUpLeft"), std::string::npos);
+    }
+    EXPECT_NE(estimated(shipped.out).find("browDownLeft"), std::string::npos);
+    EXPECT_EQ(estimated(off.out).find("browDownLeft"), std::string::npos);
+    EXPECT_EQ(estimated(off.out).find("eyeLookUpLeft"), std::string::npos);
+    EXPECT_NE(estimated(off.out).find("jawOpen"), std::string::npos);  // the fit's
+    const CliRun missing = runCli("info --cnn /nonexistent.ftm");
+    EXPECT_EQ(missing.exit_code, 1);
+    EXPECT_NE(missing.err.find("/nonexistent.ftm"), std::string::npos) << missing.err;
+    EXPECT_EQ(missing.out, "");  // the options and models are checked before anything is printed
+}
+
 TEST(Cli, DetectWritesOneJsonLinePerImage) {
     FACETRACK_REQUIRE_SHARED();
     const std::string dir = test::sharedDir() + "/data/faces300w/lfpw/testset";

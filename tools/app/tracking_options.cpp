@@ -27,6 +27,8 @@ TrackerConfig trackerConfig(const Args& args) {
     config.max_faces = args.integer("--max-faces", config.max_faces);
     config.camera.horizontal_fov_deg = args.number("--fov", config.camera.horizontal_fov_deg);
     config.camera.focal_length_px = args.number("--focal", config.camera.focal_length_px);
+    // The API reads any focal length <= 0 as "from the field of view"; a negative one typed here is a mistake.
+    if (config.camera.focal_length_px < 0.0) throw Error("--focal must be pixels, or 0 for the field of view (--fov)");
     config.calibration_frames = args.integer("--calibration-frames", config.calibration_frames);
     config.expression_prior = static_cast<float>(args.number("--expression-prior", config.expression_prior));
     config.landmark_starts = args.integer("--landmark-starts", config.landmark_starts);

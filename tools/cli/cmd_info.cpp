@@ -8,18 +8,20 @@
 namespace facetrack::cli {
 
 int runInfo(const std::vector<std::string>& argv) {
-    const Args args(argv, kDetectorOptions, {"--help"});
+    const Args args(argv, trackingOptions({}), trackingFlags({"--help"}));
     if (args.has("--help")) {
-        std::puts("usage: facetrack info [--detector auto|yunet|cascade] [--yunet PATH]\n"
-                  "Prints the version, the models in use and which pipeline stages are available.");
+        std::puts("usage: facetrack info [tracker options]\n"
+                  "Prints the version, the models in use, the tracker's pipeline stages and which ARKit shapes it\n"
+                  "estimates, as a tracker with these options (e.g. --cnn none, --no-cnn-stage, --eyes none) would run.");
         return 0;
     }
     if (!args.positional().empty()) throw Error("info takes no arguments");
+    const TrackerConfig config = trackerConfig(args);
+    const Models models = trackingModels(args);
     setLogHandler({});
     std::printf("facetrack %s\n", versionString());
     std::printf("model directory: %s\n", modelDirectory().c_str());
 
-    const Models models = Models::loadDefault();
     const auto& model = models.face;
     std::printf("face model: %s (format v%u)\n", model->sourcePath().c_str(), FaceModel::formatVersion());
     std::printf("  %d vertices, %d triangles, %d identity modes (%.1f%% of face-region variance), %zu expressions\n",
@@ -37,8 +39,6 @@ int runInfo(const std::vector<std::string>& argv) {
         std::printf("landmark model: not found in %s\n", modelDirectory().c_str());
     }
 
-    TrackerConfig config;
-    config.detector = detectorConfig(args);
     const Tracker tracker(models, config);
     std::puts("stages:");
     for (const auto& stage : tracker.stages()) {

@@ -142,7 +142,10 @@ private:
 
 std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face,
                                               const pipeline::Stage* fit) {
-    if (!cascade) return pipeline::notAvailable("cnn", "no CNN cascade (" + CnnModel::defaultPath() + " not found)");
+    if (!cascade) {
+        return pipeline::notAvailable("cnn",
+                                      "no CNN file given (Models::loadDefault() reads " + CnnModel::defaultPath() + " when it exists)");
+    }
     if (!fit || !fit->info().available) return pipeline::notAvailable("cnn", "needs the fit stage's pose and expressions");
     if (!cascade->hasCascade()) return pipeline::notAvailable("cnn", "'" + cascade->sourcePath() + "' has no cascade stages");
     return std::make_unique<CnnStage>(std::move(cascade), std::move(face), fit->estimatedExpressions());

@@ -82,7 +82,10 @@ private:
 
 std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model, const pipeline::Stage* landmarks) {
     if (!landmarks || !landmarks->info().available) return pipeline::notAvailable("refine", "needs the landmarks stage's landmarks");
-    if (!model) return pipeline::notAvailable("refine", "no CNN file (" + CnnModel::defaultPath() + " not found)");
+    if (!model) {
+        return pipeline::notAvailable("refine",
+                                      "no CNN file given (Models::loadDefault() reads " + CnnModel::defaultPath() + " when it exists)");
+    }
     if (!model->hasRefiner()) return pipeline::notAvailable("refine", "'" + model->sourcePath() + "' has no landmark refiner");
     return std::make_unique<RefineStage>(std::move(model));
 }

@@ -421,7 +421,10 @@ float LidsFollowingGaze::share(float pitchDeg) const {
 
 std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
                                                bool haveFit) {
-    if (!eyes) return pipeline::notAvailable("gaze", "no eye model (" + EyeModel::defaultPath() + " not found)");
+    if (!eyes) {
+        return pipeline::notAvailable("gaze",
+                                      "no eye model given (Models::loadDefault() reads " + EyeModel::defaultPath() + " when it exists)");
+    }
     if (!haveFit) return pipeline::notAvailable("gaze", "needs the fit stage's head pose");
     return std::make_unique<GazeStage>(std::move(eyes), std::move(face));
 }
