@@ -129,6 +129,13 @@ std::vector<NamedNet> projectNets() {
             nets.push_back({"the shipped iris net", m.iris_net, {2, 1, gaze::kPatchHeight, gaze::kPatchWidth},
                             2 * gaze::kPixelClasses * gaze::kIrisNetRows * gaze::kIrisNetColumns});
     }
+    if (std::filesystem::exists(CnnModel::defaultPath())) {  // last: the nets above keep the inputs they were checked on
+        const std::shared_ptr<const CnnModel> model = CnnModel::load(CnnModel::defaultPath());
+        const cnn::CnnModelData& d = model->data();
+        const int updates = 6 + static_cast<int>(d.expressions.size());
+        for (const cnn::CnnStageData& stage : d.stages)  // a mirror-averaged stage reads two patches at a time
+            nets.push_back({"a shipped cascade stage", stage.onnx, {2, 1, d.patch_size, d.patch_size}, 2 * updates});
+    }
     return nets;
 }
 

@@ -10,8 +10,9 @@
 // (zero outside the input), in register blocks of 4-8 output pixels x 8-16
 // output channels. Activations are kept height x width x channels, the
 // channels padded to a multiple of 8; each layer writes into the interior of
-// the next one's zero-bordered input. Where the CPU has AVX2 and FMA the same
-// loops are compiled for them.
+// the next one's zero-bordered input. The fully connected layers run after
+// the convolutions of every item, reading each weight row once for two items.
+// Where the CPU has AVX2 and FMA the same loops are compiled for them.
 
 #include <opencv2/dnn.hpp>
 
@@ -67,9 +68,11 @@ public:
                                     ///< no dense layer)
         int outputs_per_item = 0;
         /// convs[k]'s input inside its zero border; the last, the last
-        /// convolution's output.
+        /// convolution's output for every item of the batch.
         std::vector<std::vector<float>> activations;
+        /// The dense layers' outputs between them, dense_floats per item.
         std::vector<float> dense_in, dense_out;
+        int dense_floats = 0;
     };
 
 private:
