@@ -5,17 +5,11 @@ import os, sys, unittest
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "train_cnn"))
-from label_mirror_consistency import RELIABILITY_SHAPES, partner, rotation  # noqa: E402
+from label_mirror_consistency import RELIABILITY_SHAPES, axis_angle, partner, rotation  # noqa: E402
 import label_mirror_consistency as mc  # noqa: E402
+from label_pose_noise import angle_deg  # noqa: E402
 
-SHAPES = sorted(set(RELIABILITY_SHAPES) | {partner(s) for s in RELIABILITY_SHAPES})
-
-
-def axis_angle(R):
-    theta = np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))
-    if theta < 1e-12:
-        return np.zeros(3)
-    return theta / (2 * np.sin(theta)) * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+SHAPES = sorted(set(RELIABILITY_SHAPES) | {partner(s) for s in RELIABILITY_SHAPES} | {"jawLeft", "jawRight"})
 
 
 def row(omega, weights, euler):
@@ -26,24 +20,25 @@ def row(omega, weights, euler):
     return {k: str(v) for k, v in r.items()}
 
 
-class Consistency(unittest.TestCase):
-    def labels(self, extra_deg):
-        """Random labels, and their mirror images turned by a further extra_deg about the x axis."""
-        rng = np.random.default_rng(1)
-        M = np.diag([-1.0, 1.0, 1.0])
-        extra = rotation(np.radians([extra_deg, 0.0, 0.0]))
-        original, mirrored = {}, {}
-        for k in range(50):
-            R = rotation(rng.normal(0, 0.3, 3))
-            w = {s: rng.uniform(0, 1) for s in SHAPES}
-            euler = rng.normal(0, 10, 3)
-            original[str(k)] = row(axis_angle(R), w, euler)
-            mirrored[str(k)] = row(axis_angle(extra @ M @ R @ M), {partner(s): v for s, v in w.items()},
-                                   [euler[0], -euler[1], -euler[2]])
-        return original, mirrored
+def mirrored_labels(extra_deg):
+    """Random labels, and their mirror images turned by a further extra_deg about the x axis."""
+    rng = np.random.default_rng(1)
+    M = np.diag([-1.0, 1.0, 1.0])
+    extra = rotation(np.radians([extra_deg, 0.0, 0.0]))
+    original, mirrored = {}, {}
+    for k in range(50):
+        R = rotation(rng.normal(0, 0.3, 3))
+        w = {s: rng.uniform(0, 1) for s in SHAPES}
+        euler = rng.normal(0, 10, 3)
+        original[str(k)] = row(axis_angle(R), w, euler)
+        mirrored[str(k)] = row(axis_angle(extra @ M @ R @ M), {partner(s): v for s, v in w.items()},
+                               [euler[0], -euler[1], -euler[2]])
+    return original, mirrored
 
+
+class Consistency(unittest.TestCase):
     def test_exact_mirror_images_agree(self):
-        original, mirrored = self.labels(0.0)
+        original, mirrored = mirrored_labels(0.0)
         c = mc.consistency(original, mirrored, list(original))
         self.assertLess(c["rotation"].max(), 1e-3)
         self.assertLess(c["euler"].max(), 1e-9)
@@ -52,9 +47,37 @@ class Consistency(unittest.TestCase):
             self.assertAlmostEqual(r, 1.0, places=9, msg=name)
 
     def test_a_turned_mirror_image_differs_by_the_turn(self):
-        original, mirrored = self.labels(4.0)
+        original, mirrored = mirrored_labels(4.0)
         c = mc.consistency(original, mirrored, list(original))
         np.testing.assert_allclose(c["rotation"], 4.0, atol=1e-3)
+
+    def test_partners_are_named_either_way(self):
+        self.assertEqual(partner("browDown_L"), "browDown_R")
+        self.assertEqual(partner("jawLeft"), "jawRight")
+        self.assertEqual(partner("mouthRight"), "mouthLeft")
+        self.assertEqual(partner("jawOpen"), "jawOpen")
+
+
+class MirrorAveraged(unittest.TestCase):
+    def test_an_exact_mirror_image_averages_to_the_label_itself(self):
+        original, mirrored = mirrored_labels(0.0)
+        for k in original:
+            averaged = mc.mirror_averaged(original[k], mirrored[k])
+            R = rotation(np.array([float(original[k]["omega_" + c]) for c in "xyz"]))
+            A = rotation(np.array([float(averaged["omega_" + c]) for c in "xyz"]))
+            self.assertLess(angle_deg(A, R), 1e-3)
+            for s in SHAPES:
+                self.assertAlmostEqual(float(averaged[s]), float(original[k][s]), places=3)
+
+    def test_a_turned_mirror_image_moves_the_average_half_way(self):
+        original, mirrored = mirrored_labels(4.0)
+        for k in original:
+            mirrored[k]["jawLeft"] = str(float(mirrored[k]["jawLeft"]) + 0.2)  # the mirror image reads jawRight 0.2 more
+            averaged = mc.mirror_averaged(original[k], mirrored[k])
+            R = rotation(np.array([float(original[k]["omega_" + c]) for c in "xyz"]))
+            A = rotation(np.array([float(averaged["omega_" + c]) for c in "xyz"]))
+            self.assertAlmostEqual(angle_deg(A, R), 2.0, places=3)
+            self.assertAlmostEqual(float(averaged["jawRight"]), float(original[k]["jawRight"]) + 0.1, places=3)
 
 
 if __name__ == "__main__":

@@ -24,9 +24,13 @@
 // The rounds are the cascade's: each stage run as often as the file says.
 //
 //   build/tools/eval_cnn --tracker [--starts 5] [--split validation] [--yaw-deg 15] [--depth 0.1]
+//                        [--reference build/dense_averaged/faces300w.csv]
 //
 // With --tracker, the same target for the pipeline that shipped instead (LBF, the
 // landmark refiner, the fit; no cascade stages): trackerRobustness() below.
+// --reference: the poses are compared with that table's labels (e.g. the labels
+// averaged with their mirror images', label_mirror_consistency.py average)
+// instead of --labels', which still make the perturbed starts.
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
@@ -49,6 +53,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <map>
 #include <memory>
 #include <optional>
 #include <cstdio>
@@ -127,7 +132,7 @@ void report(const char* name, const RoundErrors& e) {
 ///     as a control, when frame 1 is the crop profiled at its own pose (what the
 ///     re-rendering alone changes).
 void trackerRobustness(const std::string& split, int starts, double yawDeg, double depth, const dense::LabelTable& table,
-                       const std::string& root) {
+                       const std::optional<dense::LabelTable>& reference, const std::string& root) {
     const Models shipped = Models::loadDefault();
     const auto& model = shipped.face;
     std::vector<std::string> labelled;  // the model's expressions the labels have (not the gaze stage's eyeLook shapes)
@@ -164,11 +169,25 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         if (second.data) tracker.process(view(second), 1.0 / 30.0, {}, result);
         return rotationOfFace(result, rotation) ? Lost::None : Lost::SecondFrame;
     };
+    // The rotation each crop's pose is compared with: --reference's label, or the crop's own.
+    std::map<std::string, Eigen::Matrix3d> referenceRotation;
+    if (reference) {
+        const dense::LabelColumns referenceColumns = dense::labelColumns(*reference, {});
+        for (const auto& row : reference->rows)
+            referenceRotation[row.key] = fit::rotationOf(dense::labelParams(referenceColumns, row).omega());
+    }
+    int unreferenced = 0;
+    const auto referenced = [&](const dense::LabelTable::Row& row) {
+        const bool found = !reference || referenceRotation.count(row.key) > 0;
+        if (!found && row.split == split) ++unreferenced;
+        return found;
+    };
     struct Crop {
         cv::Mat grey;
         core::Shape2 annotated;
         fit::FaceParams label;
         Eigen::VectorXd identity;
+        Eigen::Matrix3d reference;
     };
     const auto load = [&](const dense::LabelTable::Row& row) {
         Crop c;
@@ -178,6 +197,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         if (c.annotated.cols() != 68) throw Error(row.key + ": its .pts does not have 68 points");
         c.label = dense::labelParams(columns, row);
         c.identity = dense::labelIdentity(columns, row);
+        c.reference = reference ? referenceRotation.at(row.key) : fit::rotationOf(c.label.omega());
         return c;
     };
 
@@ -185,11 +205,11 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
     int trainCrops = 0;
     for (const auto& row : table.rows) {
-        if (row.split != "train") continue;
+        if (row.split != "train" || !referenced(row)) continue;
         const Crop c = load(row);
         Eigen::Matrix3d r;
         if (followed(c.grey, c.annotated, cv::Mat(), r) != Lost::None) continue;
-        sum += fit::rotationOf(c.label.omega()).transpose() * r;
+        sum += c.reference.transpose() * r;
         if (++trainCrops % 100 == 0) std::fprintf(stderr, "\r%d training crops", trainCrops);
     }
     if (trainCrops == 0) throw Error("no training crops with a face: the offset between the tracker's and the labels' axes needs them");
@@ -202,12 +222,12 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel, controlToUnperturbed, foundAgainToUnperturbed;
     int crops = 0, lostFirst = 0, lostSecond = 0, unfollowed = 0;
     for (const auto& row : table.rows) {
-        if (row.split != split) continue;
+        if (row.split != split || !referenced(row)) continue;
         const Crop c = load(row);
         const fit::Camera camera = fit::cameraFor(c.grey.cols, c.grey.rows, 60.0, 0.0);
         const std::vector<float> identity(c.identity.data(), c.identity.data() + c.identity.size());
         const std::vector<float> expression = profile::nativeWeights(*model, labelledIds, c.label.expression);
-        const Eigen::Matrix3d labelRotation = fit::rotationOf(c.label.omega()) * offset;
+        const Eigen::Matrix3d labelRotation = c.reference * offset;
         ++crops;
         Eigen::Matrix3d unperturbed;
         const bool haveUnperturbed = followed(c.grey, c.annotated, c.grey, unperturbed) == Lost::None;
@@ -252,6 +272,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::printf("the shipped tracker (dense teacher labels, not ground truth); C from %d training crops: %.2f deg "
                 "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
                 trainCrops, angleDeg(offset), offsetDeg.x(), offsetDeg.y(), offsetDeg.z());
+    if (reference) std::printf("the label compared with: --reference's (%d %s crops it does not have left out)\n", unreferenced, split.c_str());
     const auto line = [](const char* name, const std::vector<double>& deg) {
         if (deg.empty()) return (void)std::printf("  %-54s %5d\n", name, 0);
         std::printf("  %-54s %5zu, mean %5.2f median %5.2f deg, within 3 deg %5.1f %%\n", name, deg.size(), meanOf(deg), medianOf(deg),
@@ -276,12 +297,14 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
 
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--cascade", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w", "--profiled"},
+                           {"--cascade", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w", "--profiled",
+                            "--reference"},
                            {"--help", "--tracker"});
     if (args.has("--help")) {
         std::puts("usage: eval_cnn [--cascade models/cnn_cascade.ftm] [--starts 5] [--split validation]\n"
                   "       [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--faces300w DIR] [--profiled N]\n"
-                  "       eval_cnn --tracker [--starts 5] [--split validation] [--yaw-deg 15] [--depth 0.1] [--labels DIR] [--faces300w DIR]");
+                  "       eval_cnn --tracker [--starts 5] [--split validation] [--yaw-deg 15] [--depth 0.1] [--labels DIR] [--faces300w DIR]\n"
+                  "                [--reference LABELS.csv]");
         return 0;
     }
     const std::string split = args.get("--split", "validation");
@@ -290,8 +313,10 @@ int run(int argc, char** argv) {
     const double yawDeg = args.number("--yaw-deg", 15.0), depth = args.number("--depth", 0.10);
     if (starts < 1) throw Error("--starts must be at least 1");
     if (args.has("--tracker")) {
+        std::optional<dense::LabelTable> reference;
+        if (args.has("--reference")) reference = dense::readLabelTable(args.get("--reference"));
         trackerRobustness(split, starts, yawDeg, depth, dense::readLabelTable(args.get("--labels", "build/dense_labels") + "/faces300w.csv"),
-                          tools::faces300wRoot(args.get("--faces300w", "")));
+                          reference, tools::faces300wRoot(args.get("--faces300w", "")));
         return 0;
     }
 

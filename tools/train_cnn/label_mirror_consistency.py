@@ -19,6 +19,12 @@ also writes the mirrored 68 points and index.csv that label_dense reads into bui
   build/tools/label_dense --only 300w --teacher build/teacher_mirror --faces300w build/mirror300w --out build/dense_mirror
   /usr/bin/python3 tools/train_cnn/label_mirror_consistency.py compare build/dense_labels/faces300w.csv \
       build/dense_mirror/faces300w.csv
+
+`average ORIGINAL MIRRORED OUT` writes the mirror-averaged labels (mirror_averaged below) as a table of
+label_dense's columns, for `eval_cnn --tracker --reference OUT`:
+
+  /usr/bin/python3 tools/train_cnn/label_mirror_consistency.py average build/dense_labels/faces300w.csv \
+      build/dense_mirror/faces300w.csv build/dense_averaged/faces300w.csv
 """
 import csv, json, os, shutil, sys
 
@@ -33,7 +39,11 @@ RELIABILITY_SHAPES = ["jawOpen", "mouthSmile_L", "mouthSmile_R", "mouthPucker", 
 
 
 def partner(name):
-    return name[:-2] + {"_L": "_R", "_R": "_L"}[name[-2:]] if name[-2:] in ("_L", "_R") else name
+    """The shape's mirror partner (fit::mirrorName's rule): browDown_L and browDown_R, jawLeft and jawRight."""
+    for a, b in (("_L", "_R"), ("_R", "_L"), ("Left", "Right"), ("Right", "Left")):
+        if name.endswith(a):
+            return name[:-len(a)] + b
+    return name
 
 
 REPO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
@@ -120,6 +130,48 @@ def consistency(original, mirrored, keys):
             "weights": np.abs(np.array(weights)), "r": r}
 
 
+def axis_angle(R):
+    """The angle-axis vector of a rotation matrix (rotation's inverse), for angles below 180 deg."""
+    theta = np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))
+    if theta < 1e-12:
+        return np.zeros(3)
+    return theta / (2 * np.sin(theta)) * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+
+
+def mirror_averaged(a, b):
+    """A crop's label `a` averaged with its mirror image's label `b` mirrored back: the rotation is the rotation
+    nearest (R + M R' M) / 2 (the chordal mean), Euler angles (pitch + pitch') / 2, (yaw - yaw') / 2,
+    (roll - roll') / 2, each shape's weight (w + w'(partner)) / 2. What mirroring shows of either label's error
+    then cancels; an error both share (the teacher's own bias) stays. Translation, identity and the fit's
+    residual are the original label's (mirroring them back needs the camera's principal point)."""
+    M = np.diag([-1.0, 1.0, 1.0])
+    Ra = rotation(np.array([float(a["omega_" + c]) for c in "xyz"]))
+    Rb = rotation(np.array([float(b["omega_" + c]) for c in "xyz"]))
+    U, _, Vt = np.linalg.svd(Ra + M @ Rb @ M)
+    R = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+    out = dict(a)
+    out.update({"omega_" + c: f"{v:.6f}" for c, v in zip("xyz", axis_angle(R))})
+    out["pitch_deg"] = f"{(float(a['pitch_deg']) + float(b['pitch_deg'])) / 2:.4f}"
+    for angle in ("yaw_deg", "roll_deg"):
+        out[angle] = f"{(float(a[angle]) - float(b[angle])) / 2:.4f}"
+    names = list(a.keys())
+    for s in names[names.index("id20") + 1:]:
+        out[s] = f"{(float(a[s]) + float(b[partner(s)])) / 2:.4f}"
+    return out
+
+
+def average(original_csv, mirrored_csv, out_csv):
+    original = list(csv.DictReader(open(original_csv)))
+    mirrored = {r["key"]: r for r in csv.DictReader(open(mirrored_csv))}
+    rows = [mirror_averaged(r, mirrored[r["key"]]) for r in original if r["key"] in mirrored]
+    os.makedirs(os.path.dirname(out_csv) or ".", exist_ok=True)
+    with open(out_csv, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(original[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    print(f"{len(rows)} of {len(original)} crops' labels averaged with their mirror images' into {out_csv}")
+
+
 def compare(original_csv, mirrored_csv):
     original = {r["key"]: r for r in csv.DictReader(open(original_csv))}
     mirrored = {r["key"]: r for r in csv.DictReader(open(mirrored_csv))}
@@ -154,5 +206,7 @@ if __name__ == "__main__":
         prepare()
     elif len(sys.argv) == 4 and sys.argv[1] == "compare":
         compare(sys.argv[2], sys.argv[3])
+    elif len(sys.argv) == 5 and sys.argv[1] == "average":
+        average(sys.argv[2], sys.argv[3], sys.argv[4])
     else:
         sys.exit(__doc__)
