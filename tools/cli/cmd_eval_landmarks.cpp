@@ -200,6 +200,9 @@ struct FollowedFrames {
     /// yaw - label (the two conventions' constant difference, one per clip: offsets).
     std::array<std::vector<double>, kYawBins> yaw_errors{};
     std::vector<double> offsets;
+    /// Within each clip, sums of (label - its mean)(yaw - its mean) and (label - its mean)^2: their
+    /// ratio is how far the tracker's yaw turns per degree the clip's poses turn (1: as far).
+    double turn_xy = 0.0, turn_xx = 0.0;
     struct Frame {
         double yaw, label;
         std::size_t bin;
@@ -214,6 +217,12 @@ struct FollowedFrames {
         const double offset = d[d.size() / 2];
         offsets.push_back(offset);
         for (const auto& f : clip) yaw_errors[f.bin].push_back(std::abs(f.yaw - f.label - offset));
+        double yawMean = 0.0, labelMean = 0.0;
+        for (const auto& f : clip) yawMean += f.yaw / static_cast<double>(clip.size()), labelMean += f.label / static_cast<double>(clip.size());
+        for (const auto& f : clip) {
+            turn_xy += (f.label - labelMean) * (f.yaw - yawMean);
+            turn_xx += (f.label - labelMean) * (f.label - labelMean);
+        }
         clip.clear();
     }
 };
@@ -418,6 +427,9 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
                 std::printf("(the yaw error: |yaw - poses.csv's yaw - each clip's median difference|; the median differences of the %zu clips"
                             " lie in %.1f .. %.1f deg, median %.1f)\n",
                             offsets.size(), offsets.front(), offsets.back(), offsets[offsets.size() / 2]);
+            if (followed.turn_xx > 0.0)
+                std::printf("the tracker's yaw turns %.3f deg per degree of poses.csv's within each clip (least squares over the frames followed)\n",
+                            followed.turn_xy / followed.turn_xx);
             }
         }
     }

@@ -47,12 +47,14 @@
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/tracker.hpp"
+#include "fit/face_fitter.hpp"
 #include "profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <memory>
 #include <optional>
@@ -131,6 +133,9 @@ void report(const char* name, const RoundErrors& e) {
 ///     the perturbed start leaves the answer within 3 deg of the unperturbed one);
 ///     as a control, when frame 1 is the crop profiled at its own pose (what the
 ///     re-rendering alone changes).
+/// And what the 68 points can give at best: the tracker's fit (cold, as a still
+/// image's) of the crop's *annotated* points, with the mean identity and with the
+/// label's own, against the label after its own mean rotation C.
 void trackerRobustness(const std::string& split, int starts, double yawDeg, double depth, const dense::LabelTable& table,
                        const std::optional<dense::LabelTable>& reference, const std::string& root) {
     const Models shipped = Models::loadDefault();
@@ -189,6 +194,15 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         Eigen::VectorXd identity;
         Eigen::Matrix3d reference;
     };
+    // The fit of the annotated points, cold, with the mean identity (0) or the label's (1).
+    const std::shared_ptr<const fit::FitBasis>& basis = model->fitBasis();
+    const auto annotatedFit = [&](const Crop& c, int identity) {
+        fit::FaceFitter fitter(basis, {});
+        if (identity == 1) fitter.setIdentity(c.identity.head(std::min<Eigen::Index>(c.identity.size(), basis->identityCount())));
+        fit::FaceParams p;
+        fitter.fit(fit::cameraFor(c.grey.cols, c.grey.rows, 60.0, 0.0), c.annotated.cast<double>(), p, false);
+        return fit::rotationOf(p.omega());
+    };
     const auto load = [&](const dense::LabelTable::Row& row) {
         Crop c;
         c.grey = cv::imread(root + "/" + row.key, cv::IMREAD_GRAYSCALE);
@@ -201,25 +215,33 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         return c;
     };
 
-    // C: the mean of R_label^T R_tracker over the training crops found afresh, projected onto SO(3).
+    // C: the mean of R_label^T R_tracker over the training crops found afresh, projected onto SO(3);
+    // the same for the annotated points' fits.
     Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+    std::array<Eigen::Matrix3d, 2> annotatedSum = {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()};
     int trainCrops = 0;
     for (const auto& row : table.rows) {
         if (row.split != "train" || !referenced(row)) continue;
         const Crop c = load(row);
+        for (int identity = 0; identity < 2; ++identity) annotatedSum[identity] += c.reference.transpose() * annotatedFit(c, identity);
         Eigen::Matrix3d r;
         if (followed(c.grey, c.annotated, cv::Mat(), r) != Lost::None) continue;
         sum += c.reference.transpose() * r;
         if (++trainCrops % 100 == 0) std::fprintf(stderr, "\r%d training crops", trainCrops);
     }
     if (trainCrops == 0) throw Error("no training crops with a face: the offset between the tracker's and the labels' axes needs them");
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d offset = svd.matrixU() * svd.matrixV().transpose();
-    if (offset.determinant() < 0) offset = svd.matrixU() * Eigen::Vector3d(1, 1, -1).asDiagonal() * svd.matrixV().transpose();
+    const auto nearestRotation = [](const Eigen::Matrix3d& m) {
+        const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+        const double d = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+        return Eigen::Matrix3d(svd.matrixU() * Eigen::Vector3d(1, 1, d).asDiagonal() * svd.matrixV().transpose());
+    };
+    const Eigen::Matrix3d offset = nearestRotation(sum);
+    const std::array<Eigen::Matrix3d, 2> annotatedOffset = {nearestRotation(annotatedSum[0]), nearestRotation(annotatedSum[1])};
 
     std::mt19937 rng(23);
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel, controlToUnperturbed, foundAgainToUnperturbed;
+    std::array<std::vector<double>, 2> annotatedToLabel;
     int crops = 0, lostFirst = 0, lostSecond = 0, unfollowed = 0;
     for (const auto& row : table.rows) {
         if (row.split != split || !referenced(row)) continue;
@@ -228,6 +250,8 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         const std::vector<float> identity(c.identity.data(), c.identity.data() + c.identity.size());
         const std::vector<float> expression = profile::nativeWeights(*model, labelledIds, c.label.expression);
         const Eigen::Matrix3d labelRotation = c.reference * offset;
+        for (int identity = 0; identity < 2; ++identity)
+            annotatedToLabel[identity].push_back(angleDeg(annotatedFit(c, identity) * (c.reference * annotatedOffset[identity]).transpose()));
         ++crops;
         Eigen::Matrix3d unperturbed;
         const bool haveUnperturbed = followed(c.grey, c.annotated, c.grey, unperturbed) == Lost::None;
@@ -293,6 +317,9 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::printf("  %-54s %5d, within 3 deg %5.1f %%\n", "the same, a live tracker's search counted", comparable,
                 (hits(toUnperturbed) + hits(foundAgainToUnperturbed)) / std::max(comparable, 1));
     line("control: frame 1 profiled unturned, to the unperturbed", controlToUnperturbed);
+    std::printf("what the 68 points give at best: the fit of the annotated points, cold, to the label (after their own C)\n");
+    line("with the mean identity (a still image's)", annotatedToLabel[0]);
+    line("with the label's identity", annotatedToLabel[1]);
 }
 
 int run(int argc, char** argv) {
