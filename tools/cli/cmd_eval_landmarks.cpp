@@ -218,7 +218,9 @@ struct FollowedFrames {
         offsets.push_back(offset);
         for (const auto& f : clip) yaw_errors[f.bin].push_back(std::abs(f.yaw - f.label - offset));
         double yawMean = 0.0, labelMean = 0.0;
-        for (const auto& f : clip) yawMean += f.yaw / static_cast<double>(clip.size()), labelMean += f.label / static_cast<double>(clip.size());
+        for (const auto& f : clip) yawMean += f.yaw, labelMean += f.label;
+        yawMean /= static_cast<double>(clip.size());
+        labelMean /= static_cast<double>(clip.size());
         for (const auto& f : clip) {
             turn_xy += (f.label - labelMean) * (f.yaw - yawMean);
             turn_xx += (f.label - labelMean) * (f.label - labelMean);
@@ -428,8 +430,8 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
                             " lie in %.1f .. %.1f deg, median %.1f)\n",
                             offsets.size(), offsets.front(), offsets.back(), offsets[offsets.size() / 2]);
             if (followed.turn_xx > 0.0)
-                std::printf("the tracker's yaw turns %.3f deg per degree of poses.csv's within each clip (least squares over the frames followed)\n",
-                            followed.turn_xy / followed.turn_xx);
+                std::printf("the tracker's yaw turns %.3f deg per degree of poses.csv's within each clip"
+                            " (least squares over the frames followed)\n", followed.turn_xy / followed.turn_xx);
             }
         }
     }

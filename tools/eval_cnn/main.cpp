@@ -250,8 +250,10 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         const std::vector<float> identity(c.identity.data(), c.identity.data() + c.identity.size());
         const std::vector<float> expression = profile::nativeWeights(*model, labelledIds, c.label.expression);
         const Eigen::Matrix3d labelRotation = c.reference * offset;
-        for (int identity = 0; identity < 2; ++identity)
-            annotatedToLabel[identity].push_back(angleDeg(annotatedFit(c, identity) * (c.reference * annotatedOffset[identity]).transpose()));
+        for (int identity = 0; identity < 2; ++identity) {
+            const Eigen::Matrix3d labelled = c.reference * annotatedOffset[identity];
+            annotatedToLabel[identity].push_back(angleDeg(annotatedFit(c, identity) * labelled.transpose()));
+        }
         ++crops;
         Eigen::Matrix3d unperturbed;
         const bool haveUnperturbed = followed(c.grey, c.annotated, c.grey, unperturbed) == Lost::None;
