@@ -72,7 +72,8 @@ make_profiled_faces --turn-clips writes head turns): the tracker, as a video app
 runs it (its own detector until it finds the face, then tracking mode; no filter), follows
 the face through it. Adds, over every frame (with poses.csv, by |yaw| bin): the share of
 frames where it follows no face, the box NME where it does, and with poses.csv the error of the
-head's yaw once each clip's constant difference to poses.csv (another convention) is removed.)";
+head's yaw once each clip's constant difference to poses.csv (another convention) is removed, and
+how far the head's yaw turns per degree of poses.csv's within each clip (1: as far).)";
 
 using core::Shape2;
 
