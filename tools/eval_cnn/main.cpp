@@ -242,6 +242,11 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::vector<double> startDeg, toLabel, toUnperturbed, unperturbedToLabel, controlToUnperturbed, foundAgainToUnperturbed;
     std::array<std::vector<double>, 2> annotatedToLabel;
+    std::array<std::vector<double>, 3> unperturbedEuler, labelEuler;  // pitch, yaw, roll (deg), the label's after C
+    const auto eulerOf = [](const Eigen::Matrix3d& rotation) {
+        const Eigen::AngleAxisd turn(rotation);
+        return fit::eulerDegrees(turn.angle() * turn.axis());
+    };
     int crops = 0, lostFirst = 0, lostSecond = 0, unfollowed = 0;
     for (const auto& row : table.rows) {
         if (row.split != split || !referenced(row)) continue;
@@ -257,7 +262,11 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         ++crops;
         Eigen::Matrix3d unperturbed;
         const bool haveUnperturbed = followed(c.grey, c.annotated, c.grey, unperturbed) == Lost::None;
-        if (haveUnperturbed) unperturbedToLabel.push_back(angleDeg(unperturbed * labelRotation.transpose()));
+        if (haveUnperturbed) {
+            unperturbedToLabel.push_back(angleDeg(unperturbed * labelRotation.transpose()));
+            const Eigen::Vector3d ours = eulerOf(unperturbed), theirs = eulerOf(labelRotation);
+            for (int axis = 0; axis < 3; ++axis) unperturbedEuler[axis].push_back(ours[axis]), labelEuler[axis].push_back(theirs[axis]);
+        }
         else ++unfollowed;
         // Control: frame 1 the crop profiled at its own pose, what profiling alone changes.
         const cv::Mat rendered = profile::profileFace(*model, c.grey, camera, identity, expression, c.label, c.label).image;
@@ -294,7 +303,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     }
     std::fprintf(stderr, "\r");
     if (crops == 0) throw Error("no crops in split '" + split + "'");
-    const Eigen::Vector3d offsetDeg = fit::eulerDegrees(Eigen::AngleAxisd(offset).angle() * Eigen::AngleAxisd(offset).axis());
+    const Eigen::Vector3d offsetDeg = eulerOf(offset);
     std::printf("the shipped tracker (dense teacher labels, not ground truth); C from %d training crops: %.2f deg "
                 "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
                 trainCrops, angleDeg(offset), offsetDeg.x(), offsetDeg.y(), offsetDeg.z());
@@ -310,6 +319,20 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     line("start (frame 1's pose) to the label", startDeg);
     line("frame 2 to the label (after C)", toLabel);
     line("unperturbed (frame 1 the crop) to the label", unperturbedToLabel);
+    // Per Euler angle, the least-squares line ours = a label + b and the spread about it.
+    std::printf("  %-54s", "unperturbed against the label, per angle: ours =");
+    for (int axis = 0; axis < 3 && unperturbedEuler[axis].size() > 1; ++axis) {
+        const auto& x = labelEuler[axis];
+        const auto& y = unperturbedEuler[axis];
+        const double mx = meanOf(x), my = meanOf(y);
+        double xy = 0.0, xx = 0.0;
+        for (std::size_t i = 0; i < x.size(); ++i) xy += (x[i] - mx) * (y[i] - my), xx += (x[i] - mx) * (x[i] - mx);
+        const double a = xx > 0.0 ? xy / xx : 0.0;
+        double residual = 0.0;
+        for (std::size_t i = 0; i < x.size(); ++i) residual += std::pow(y[i] - my - a * (x[i] - mx), 2);
+        std::printf(" %s %.3f x label, spread %.2f deg%s", axis == 0 ? "pitch" : axis == 1 ? "yaw" : "roll", a,
+                    std::sqrt(residual / static_cast<double>(x.size())), axis < 2 ? ";" : "\n");
+    }
     line("frame 2 to the unperturbed (label-free)", toUnperturbed);
     const int comparable = starts * (crops - unfollowed);  // the label-free figure's starts, lost ones included
     const auto hits = [](const std::vector<double>& deg) { return within3(deg) * static_cast<double>(deg.size()); };
