@@ -266,8 +266,9 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
             unperturbedToLabel.push_back(angleDeg(unperturbed * labelRotation.transpose()));
             const Eigen::Vector3d ours = eulerOf(unperturbed), theirs = eulerOf(labelRotation);
             for (int axis = 0; axis < 3; ++axis) unperturbedEuler[axis].push_back(ours[axis]), labelEuler[axis].push_back(theirs[axis]);
+        } else {
+            ++unfollowed;
         }
-        else ++unfollowed;
         // Control: frame 1 the crop profiled at its own pose, what profiling alone changes.
         const cv::Mat rendered = profile::profileFace(*model, c.grey, camera, identity, expression, c.label, c.label).image;
         Eigen::Matrix3d control;
@@ -321,6 +322,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     line("unperturbed (frame 1 the crop) to the label", unperturbedToLabel);
     // Per Euler angle, the least-squares line ours = a label + b and the spread about it.
     std::printf("  %-54s", "unperturbed against the label, per angle: ours =");
+    const char* const angleNames[3] = {"pitch", "yaw", "roll"};
     for (int axis = 0; axis < 3 && unperturbedEuler[axis].size() > 1; ++axis) {
         const auto& x = labelEuler[axis];
         const auto& y = unperturbedEuler[axis];
@@ -330,9 +332,10 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         const double a = xx > 0.0 ? xy / xx : 0.0;
         double residual = 0.0;
         for (std::size_t i = 0; i < x.size(); ++i) residual += std::pow(y[i] - my - a * (x[i] - mx), 2);
-        std::printf(" %s %.3f x label, spread %.2f deg%s", axis == 0 ? "pitch" : axis == 1 ? "yaw" : "roll", a,
-                    std::sqrt(residual / static_cast<double>(x.size())), axis < 2 ? ";" : "\n");
+        std::printf(" %s %.3f x label, spread %.2f deg%s", angleNames[axis], a, std::sqrt(residual / static_cast<double>(x.size())),
+                    axis < 2 ? ";" : "");
     }
+    std::putchar('\n');
     line("frame 2 to the unperturbed (label-free)", toUnperturbed);
     const int comparable = starts * (crops - unfollowed);  // the label-free figure's starts, lost ones included
     const auto hits = [](const std::vector<double>& deg) { return within3(deg) * static_cast<double>(deg.size()); };
