@@ -2,6 +2,7 @@
 #include "commands.hpp"
 #include "json.hpp"
 #include "common/faces300w.hpp"
+#include "stats.hpp"
 #include "still_landmarks.hpp"
 
 #include "app/image_view.hpp"
@@ -201,9 +202,9 @@ struct FollowedFrames {
     /// yaw - label (the two conventions' constant difference, one per clip: offsets).
     std::array<std::vector<double>, kYawBins> yaw_errors{};
     std::vector<double> offsets;
-    /// Within each clip, sums of (label - its mean)(yaw - its mean) and (label - its mean)^2: their
-    /// ratio is how far the tracker's yaw turns per degree the clip's poses turn (1: as far).
-    double turn_xy = 0.0, turn_xx = 0.0;
+    /// Every frame's label and yaw less their clip's means: the slope of the line through them is
+    /// how far the tracker's yaw turns per degree the clip's poses turn (1: as far).
+    std::vector<double> turn_label, turn_yaw;
     struct Frame {
         double yaw, label;
         std::size_t bin;
@@ -222,10 +223,7 @@ struct FollowedFrames {
         for (const auto& f : clip) yawMean += f.yaw, labelMean += f.label;
         yawMean /= static_cast<double>(clip.size());
         labelMean /= static_cast<double>(clip.size());
-        for (const auto& f : clip) {
-            turn_xy += (f.label - labelMean) * (f.yaw - yawMean);
-            turn_xx += (f.label - labelMean) * (f.label - labelMean);
-        }
+        for (const auto& f : clip) turn_label.push_back(f.label - labelMean), turn_yaw.push_back(f.yaw - yawMean);
         clip.clear();
     }
 };
@@ -430,9 +428,9 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
                 std::printf("(the yaw error: |yaw - poses.csv's yaw - each clip's median difference|; the median differences of the %zu clips"
                             " lie in %.1f .. %.1f deg, median %.1f)\n",
                             offsets.size(), offsets.front(), offsets.back(), offsets[offsets.size() / 2]);
-            if (followed.turn_xx > 0.0)
+            if (const double slope = leastSquaresLine(followed.turn_label, followed.turn_yaw).slope; std::isfinite(slope))
                 std::printf("the tracker's yaw turns %.3f deg per degree of poses.csv's within each clip"
-                            " (least squares over the frames followed)\n", followed.turn_xy / followed.turn_xx);
+                            " (least squares over the frames followed)\n", slope);
             }
         }
     }

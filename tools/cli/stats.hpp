@@ -35,4 +35,22 @@ inline double pearson(const std::vector<double>& a, const std::vector<double>& b
     return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : std::nan("");
 }
 
+/// The least-squares line y = slope x + b through two samples of one size, and the spread (RMS)
+/// of y about it. Slope NaN when x is constant.
+struct Line {
+    double slope, spread;
+};
+inline Line leastSquaresLine(const std::vector<double>& x, const std::vector<double>& y) {
+    const double mx = mean(x), my = mean(y);
+    double xy = 0.0, xx = 0.0, yy = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        xy += (x[i] - mx) * (y[i] - my);
+        xx += (x[i] - mx) * (x[i] - mx);
+        yy += (y[i] - my) * (y[i] - my);
+    }
+    if (!(xx > 0.0)) return {std::nan(""), std::nan("")};
+    const double slope = xy / xx;
+    return {slope, std::sqrt(std::max(0.0, yy - slope * xy) / static_cast<double>(x.size()))};
+}
+
 }  // namespace facetrack::cli

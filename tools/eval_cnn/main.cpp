@@ -34,6 +34,7 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
+#include "cli/stats.hpp"
 #include "cnn/cnn_model_data.hpp"
 #include "facetrack/detector.hpp"
 #include "cnn/landmark_net.hpp"
@@ -324,16 +325,8 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::printf("  %-54s", "unperturbed against the label, per angle: ours =");
     const char* const angleNames[3] = {"pitch", "yaw", "roll"};
     for (int axis = 0; axis < 3 && unperturbedEuler[axis].size() > 1; ++axis) {
-        const auto& x = labelEuler[axis];
-        const auto& y = unperturbedEuler[axis];
-        const double mx = meanOf(x), my = meanOf(y);
-        double xy = 0.0, xx = 0.0;
-        for (std::size_t i = 0; i < x.size(); ++i) xy += (x[i] - mx) * (y[i] - my), xx += (x[i] - mx) * (x[i] - mx);
-        const double a = xx > 0.0 ? xy / xx : 0.0;
-        double residual = 0.0;
-        for (std::size_t i = 0; i < x.size(); ++i) residual += std::pow(y[i] - my - a * (x[i] - mx), 2);
-        std::printf(" %s %.3f x label, spread %.2f deg%s", angleNames[axis], a, std::sqrt(residual / static_cast<double>(x.size())),
-                    axis < 2 ? ";" : "");
+        const cli::Line fitted = cli::leastSquaresLine(labelEuler[axis], unperturbedEuler[axis]);
+        std::printf(" %s %.3f x label, spread %.2f deg%s", angleNames[axis], fitted.slope, fitted.spread, axis < 2 ? ";" : "");
     }
     std::putchar('\n');
     line("frame 2 to the unperturbed (label-free)", toUnperturbed);

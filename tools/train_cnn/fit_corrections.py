@@ -29,7 +29,8 @@ def pearson(a, b):
 def figures(estimate, label):
     at_rest = label <= label.median()
     top = label >= label.quantile(0.75)
-    return pearson(estimate, label), estimate[at_rest].quantile(0.9).item(), (estimate[top].mean() - estimate[at_rest].mean()).item()
+    rest = estimate[at_rest].quantile(train_stage.REST_QUANTILE).item()
+    return pearson(estimate, label), rest, (estimate[top].mean() - estimate[at_rest].mean()).item()
 
 
 def chosen(table):

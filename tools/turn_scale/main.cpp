@@ -17,6 +17,7 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
+#include "cli/stats.hpp"
 #include "common/faces300w.hpp"
 #include "core/pts.hpp"
 #include "dense/label_table.hpp"
@@ -26,7 +27,6 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -76,11 +76,8 @@ int run(int argc, char** argv) {
     const auto bare = FaceModel::load(withConvention->sourcePath());
     const std::vector<Variant> variants = {{"shipped", withConvention}, {"own identity", withConvention, true},
                                            {"no convention", bare}, {"no jaw sides", withConvention, false, true}};
-    struct Sums {
-        double xy = 0, xx = 0, x = 0, y = 0, yy = 0;
-        int n = 0;
-    };
-    std::vector<Sums> sums(variants.size());
+    std::vector<double> turns;                                 // per copy, its known turn (deg)
+    std::vector<std::vector<double>> changes(variants.size());  // per variant and copy, the fitted yaw's change
     std::map<std::string, std::vector<double>> photographYaw;  // per photograph, per variant
 
     std::ifstream poses(profiled + "/poses.csv");
@@ -115,12 +112,9 @@ int run(int argc, char** argv) {
         }
         load(profiled + "/" + copy, grey, points);
         const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
-        const double turn = copyYaw - label->second->values[static_cast<std::size_t>(yawColumn)];
-        for (std::size_t k = 0; k < variants.size(); ++k) {
-            const double change = fittedYaw(variants[k], camera, points, identity) - photographYaw[stem][k];
-            Sums& s = sums[k];
-            s.xy += turn * change, s.xx += turn * turn, s.x += turn, s.y += change, s.yy += change * change, ++s.n;
-        }
+        turns.push_back(copyYaw - label->second->values[static_cast<std::size_t>(yawColumn)]);
+        for (std::size_t k = 0; k < variants.size(); ++k)
+            changes[k].push_back(fittedYaw(variants[k], camera, points, identity) - photographYaw[stem][k]);
         if (++copies % 50 == 0) std::fprintf(stderr, "\r%d copies", copies);
     }
     std::fprintf(stderr, "\r");
@@ -128,11 +122,8 @@ int run(int argc, char** argv) {
     std::printf("%d copies in %s (%d without a label left out); the fit of their annotated points against the turn:\n", copies,
                 profiled.c_str(), skipped);
     for (std::size_t k = 0; k < variants.size(); ++k) {
-        const Sums& s = sums[k];
-        const double n = s.n, cxy = s.xy - s.x * s.y / n, cxx = s.xx - s.x * s.x / n, cyy = s.yy - s.y * s.y / n;
-        const double slope = cxy / cxx;
-        std::printf("  %-14s turns %.3f deg per degree, spread %.2f deg\n", variants[k].name, slope,
-                    std::sqrt(std::max(0.0, (cyy - slope * cxy) / n)));
+        const cli::Line line = cli::leastSquaresLine(turns, changes[k]);
+        std::printf("  %-14s turns %.3f deg per degree, spread %.2f deg\n", variants[k].name, line.slope, line.spread);
     }
     return 0;
 }
