@@ -5,6 +5,7 @@
 #include "test_support.hpp"
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <numeric>
 #include <random>
@@ -145,6 +146,41 @@ TEST(Fit, JawSilhouetteStaysBesideItsLandmarkAtEveryYaw) {
             EXPECT_LT(std::abs(silhouette(1, i) - own(1, i)), 0.15 * faceHeight) << "jaw point " << i << " at yaw " << yaw;
         }
     }
+}
+
+TEST(Fit, JawSidePointsWeighLessOnATurnedFace) {
+    const fit::FitSettings settings;
+    for (const double yaw : {0.0, 10.0, -20.0, 20.0}) EXPECT_DOUBLE_EQ(fit::jawSideWeight(settings, yaw), 1.0) << yaw;
+    EXPECT_DOUBLE_EQ(fit::jawSideWeight(settings, -30.0), 0.625);
+    for (const double yaw : {40.0, -40.0, 70.0}) EXPECT_DOUBLE_EQ(fit::jawSideWeight(settings, yaw), 0.25) << yaw;
+    for (int i = 0; i < model::kLandmarkCount; ++i) EXPECT_EQ(fit::isJawSide(i), i <= 5 || (i >= 11 && i <= 16)) << i;
+}
+
+// A face turned 50 deg whose far side's jaw points (11-16, the cheek turned
+// away) lie outside the silhouette, as a landmark regressor's that slip onto the
+// background: weighed a quarter, they turn the fit less than at full weight.
+// (Points off the near side's outline mostly move its contour along its
+// candidates and turn the fit by 0.1-0.3 deg either way.)
+TEST(Fit, JawSidePointsPullATurnedFitLess) {
+    const Scene s;
+    fit::FaceParams truth;
+    truth.pose << fit::omegaFromEuler({0, 50, 0}), 0, 0, 60;
+    truth.expression = Eigen::VectorXd::Zero(s.basis->expressionCount());
+    Landmarks2d observed = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, truth,
+                                                 fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, truth));
+    const double centre = observed.row(0).segment(17, 51).mean(), shift = 0.1 * fit::eyeCornerDistance(observed);
+    for (int i = 11; i <= 16; ++i) observed(0, i) += observed(0, i) > centre ? shift : -shift;
+    const auto yawError = [&](const fit::FitSettings& settings) {
+        fit::FaceFitter fitter(s.basis, settings);
+        fit::FaceParams p;
+        fitter.fit(s.camera, observed, p, false);
+        return std::abs(fit::eulerDegrees(p.omega()).y() - 50.0);
+    };
+    fit::FitSettings fullWeight;
+    fullWeight.jaw_turned_weight = 1.0;
+    const double tapered = yawError({}), full = yawError(fullWeight);
+    std::printf("far jaw points off the silhouette: yaw error %.2f deg weighed a quarter, %.2f deg at full weight\n", tapered, full);
+    EXPECT_LT(tapered, 0.5 * full);
 }
 
 struct FitErrors {
@@ -344,6 +380,7 @@ protected:
         // Start the pose a little off the truth, so that every residual is non-zero.
         pose = frame.truth.pose + (Eigen::Matrix<double, 6, 1>() << 0.02, -0.03, 0.01, 0.3, -0.2, 1.0).finished();
         scale = fit::eyeCornerDistance(frame.observed);
+        for (int i = 0; i < model::kLandmarkCount; ++i) weights[static_cast<std::size_t>(i)] = fit::isJawSide(i) ? 0.5 : 1.0;
     }
 
     /// Checks the cost at the test's parameters; `outliers` moves that many
@@ -351,8 +388,8 @@ protected:
     ceres::GradientChecker::ProbeResults probe(bool withIdentity, int outliers) {
         Landmarks2d observed = frame.observed;
         for (int i = 0; i < outliers; ++i) observed.col(5 * i + 3) += Eigen::Vector2d(0.5 * scale, -0.3 * scale);
-        const fit::PointsCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, fit::landmarkSlots(*s.basis),
-                                  withIdentity);
+        const fit::PointsCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05, weights.data()},
+                                   fit::landmarkSlots(*s.basis), withIdentity);
         // Ridders' extrapolation (what GradientChecker uses) from steps small enough
         // that a residual near the Huber threshold stays on one side of it.
         ceres::NumericDiffOptions options;
@@ -370,6 +407,7 @@ protected:
     Eigen::VectorXd identity;
     Eigen::Matrix<double, 6, 1> pose;
     double scale = 1.0;
+    std::array<double, model::kLandmarkCount> weights{};  // the jaw's sides weighed less, as on a turned face
 };
 
 TEST_F(CostGradients, PointsCostJacobiansMatchFiniteDifferences) {
@@ -394,6 +432,21 @@ TEST_F(CostGradients, OutliersAreInTheLinearPartOfTheLoss) {
     ASSERT_TRUE(cost.Evaluate(blocks, residuals.data(), nullptr));
     EXPECT_GT(residuals.segment<2>(6).norm(), 0.15);
     EXPECT_LT(residuals.segment<2>(6).norm(), 0.35);
+}
+
+TEST_F(CostGradients, AWeightScalesItsPointsResidual) {
+    const fit::PointsCost weighted({s.basis.get(), &s.basis->neutral, &s.camera, frame.observed.data(), &scale, 0.05, weights.data()},
+                                   fit::landmarkSlots(*s.basis), false);
+    const fit::PointsCost plain({s.basis.get(), &s.basis->neutral, &s.camera, frame.observed.data(), &scale, 0.05},
+                                fit::landmarkSlots(*s.basis), false);
+    const double* blocks[] = {pose.data(), frame.truth.expression.data()};
+    Eigen::VectorXd a(2 * model::kLandmarkCount), b(2 * model::kLandmarkCount);
+    ASSERT_TRUE(weighted.Evaluate(blocks, a.data(), nullptr));
+    ASSERT_TRUE(plain.Evaluate(blocks, b.data(), nullptr));
+    for (int i = 0; i < model::kLandmarkCount; ++i) {
+        EXPECT_GT(b.segment<2>(2 * i).norm(), 0.0);
+        EXPECT_NEAR((a.segment<2>(2 * i) - weights[static_cast<std::size_t>(i)] * b.segment<2>(2 * i)).norm(), 0.0, 1e-12) << i;
+    }
 }
 
 TEST(CostGradientsPrior, ShrinkToZeroJacobianMatchesFiniteDifferences) {

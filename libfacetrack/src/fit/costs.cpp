@@ -61,8 +61,9 @@ bool PointsCost::Evaluate(double const* const* parameters, double* residuals, do
         const double s = e.squaredNorm();
         const bool inlier = s <= delta2;
         const double c = inlier ? 1.0 : std::sqrt((2.0 * in_.huber * std::sqrt(s) - delta2) / s);
-        residuals[2 * i] = c * e.x();
-        residuals[2 * i + 1] = c * e.y();
+        const double weight = in_.weights ? in_.weights[i] : 1.0;
+        residuals[2 * i] = weight * c * e.x();
+        residuals[2 * i + 1] = weight * c * e.y();
         if (!jacobians) continue;
 
         // dr/dy = (c I + 2 c'(s) e e^T) de/dy, c'(s) = (delta^2 / s^2 - delta / s^(3/2)) / (2 c),
@@ -75,6 +76,7 @@ bool PointsCost::Evaluate(double const* const* parameters, double* residuals, do
             const double dc = (delta2 / (s * s) - in_.huber / (s * std::sqrt(s))) / (2.0 * c);
             dProj = (c * Eigen::Matrix2d::Identity() + 2.0 * dc * e * e.transpose()) * dProj;
         }
+        dProj *= weight;
         if (jacobians[0]) {
             Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>> j(jacobians[0], 2 * count, 6);
             for (int d = 0; d < 3; ++d) j.block<2, 1>(2 * i, d) = dProj * (dRotation[d] * x);

@@ -44,6 +44,14 @@ Eigen::Matrix<double, 6, 1> poseTemporalWeights(const FitSettings& s) {
 
 }  // namespace
 
+bool isJawSide(int landmark) { return landmark < 6 || (landmark > 10 && landmark < kJaw); }
+
+double jawSideWeight(const FitSettings& s, double yawDeg) {
+    const double span = std::max(s.jaw_turn_to_deg - s.jaw_turn_from_deg, 1e-9);
+    const double turned = std::clamp((std::abs(yawDeg) - s.jaw_turn_from_deg) / span, 0.0, 1.0);
+    return 1.0 - turned * (1.0 - s.jaw_turned_weight);
+}
+
 double eyeCornerDistance(const Landmarks2d& points) { return (points.col(36) - points.col(45)).norm(); }
 
 double faceScale(const Landmarks2d& points) {
@@ -138,7 +146,9 @@ FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings&
     double* pose = current_.pose.data();
     double* expression = current_.expression.data();
     problem_ = std::make_unique<ceres::Problem>();
-    landmarks_ = new PointsCost({basis_.get(), &base_, &camera_, observed_.data(), &scale_, settings_.huber}, landmarkSlots(*basis_), false);
+    point_weights_.fill(1.0);
+    landmarks_ = new PointsCost({basis_.get(), &base_, &camera_, observed_.data(), &scale_, settings_.huber, point_weights_.data()},
+                                landmarkSlots(*basis_), false);
     problem_->AddResidualBlock(landmarks_, nullptr, pose, expression);
     // Cold fits only: no previous frame, so no temporal prior here.
     expression_weights_ = basis_->expressionPriorWeights(settings_.expression_l2);
@@ -266,6 +276,8 @@ void FaceFitter::chooseContour(bool nearest, FitReport& report) {
     report.contour = nearest ? nearestContourAt(*basis_, slots_, camera_, current_.pose, observed_)
                              : silhouetteContourAt(*basis_, slots_, camera_, current_.pose);
     for (int i = 0; i < kJaw; ++i) landmarks_->setSlot(i, report.contour[i]);
+    const double jawSides = std::sqrt(jawSideWeight(settings_, eulerDegrees(current_.omega()).y()));
+    for (int i = 0; i < kJaw; ++i) point_weights_[static_cast<std::size_t>(i)] = isJawSide(i) ? jawSides : 1.0;
 }
 
 FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm) {
@@ -318,14 +330,18 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
 
     ceres::Problem problem;
     std::vector<double> scales(frames.size());
+    std::vector<std::array<double, model::kLandmarkCount>> weights(frames.size());
     problem.AddResidualBlock(new ShrinkToZero(basis.identityCount(), settings.identity_prior * static_cast<double>(frames.size())),
                              nullptr, identity.data());
     for (std::size_t f = 0; f < frames.size(); ++f) {
         auto& frame = frames[f];
         if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
         scales[f] = faceScale(frame.observed);
-        auto* cost = new PointsCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber},
-                                     landmarkSlots(basis), true);
+        const double jawSides = std::sqrt(jawSideWeight(settings, eulerDegrees(frame.params.omega()).y()));
+        for (int i = 0; i < model::kLandmarkCount; ++i) weights[f][static_cast<std::size_t>(i)] = isJawSide(i) ? jawSides : 1.0;
+        auto* cost = new PointsCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber,
+                                     weights[f].data()},
+                                    landmarkSlots(basis), true);
         for (int i = 0; i < kJaw; ++i) cost->setSlot(i, frame.contour[i]);
         problem.AddResidualBlock(cost, nullptr, frame.params.pose.data(), frame.params.expression.data(), identity.data());
         problem.AddResidualBlock(new ShrinkToZero(basis.expressionPriorWeights(settings.expression_l2)), nullptr,

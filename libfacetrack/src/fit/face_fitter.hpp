@@ -37,7 +37,25 @@ struct FitSettings {
     double identity_prior = 2e-4;             ///< w_id |a|^2 during identity calibration
     int cold_iterations = 40;
     int warm_iterations = 5;
+    /// The jaw's side points weigh 1 up to |yaw| jaw_turn_from_deg, jaw_turned_weight from
+    /// jaw_turn_to_deg on, linearly between (jawSideWeight).
+    double jaw_turn_from_deg = 20.0;
+    double jaw_turn_to_deg = 40.0;
+    double jaw_turned_weight = 0.25;
 };
+
+/// The jaw's side points: 0-5 and 11-16, beside the chin.
+bool isJawSide(int landmark);
+
+/// The weight of the jaw's side points in the fit of a face at `yawDeg` (the
+/// current estimate's; set when the contour is chosen). On a face turned past
+/// ~30 deg, where those points sit and where the model's silhouette does part
+/// ways: the 300-W training faces' annotated points fit 0.93x the inner points'
+/// yaw there, against 1.01-1.07x below 30 deg, and the exact points of face
+/// profiling's turned copies fit 0.94x the turn (1.00 without the jaw's sides).
+/// Weighed less there, they keep the face's width without reading turns short
+/// (docs/fitting.md, "Turns").
+double jawSideWeight(const FitSettings& settings, double yawDeg);
 
 struct FitReport {
     double residual = 0.0;  ///< RMS landmark distance after the fit, in face sizes (faceScale)
@@ -137,6 +155,7 @@ private:
     Camera camera_;
     Landmarks2d observed_ = Landmarks2d::Zero();
     double scale_ = 1.0;
+    std::array<double, model::kLandmarkCount> point_weights_;  // PointsCost's factor per landmark
     FaceParams current_;
     Pose6 previous_pose_;
     Eigen::VectorXd previous_expression_;
