@@ -1,6 +1,7 @@
 // turn_scale: how far the landmark fit's yaw turns per degree of a known turn (docs/cnn.md, "Session 37").
 //
 //   build/tools/turn_scale [--profiled build/profiled/validation] [--labels build/dense_labels] [--faces300w DIR]
+//   build/tools/turn_scale --photographs train|validation|test [--faces300w DIR]
 //
 // Face profiling's copies (make_profiled_faces) turn a photographed head by a known angle: a copy's
 // yaw in DIR/poses.csv minus its photograph's dense label's (MediaPipe's mesh fitted with the face
@@ -14,6 +15,10 @@
 //   no convention  the face model's own landmark vertices
 //   no jaw sides   the 12 jaw points beside the chin (0-5, 11-16) observed where the fit puts
 //                  them, refitted until they stay: they pull nothing
+//
+// With --photographs SPLIT, the 300-W crops of the split instead: the shipped fit's yaw over the
+// yaw of the fit without the jaw's sides (the inner points'), by |yaw| of the latter: where the
+// jaw's pull turns a photographed head (docs/fitting.md, "Turns"). No label needed.
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
@@ -57,14 +62,54 @@ double fittedYaw(const Variant& v, const fit::Camera& camera, const fit::Landmar
     return fit::eulerDegrees(p.omega()).y();
 }
 
+/// The shipped fit's yaw against the inner points' on the annotated crops of a 300-W split, by |yaw|.
+int photographs(const std::string& root, const std::string& split) {
+    const auto model = FaceModel::loadDefault();
+    const Variant shipped{"shipped", model}, inner{"no jaw sides", model, false, true};
+    struct Bin {
+        double from, to, full = 0.0, inner = 0.0;
+        std::vector<double> differences = {};
+    };
+    std::vector<Bin> bins = {{0, 10}, {10, 20}, {20, 30}, {30, 90}};
+    int faces = 0;
+    for (const auto& image : tools::list300W(root, tools::parseSplit(split))) {
+        const cv::Mat grey = cv::imread(image.image, cv::IMREAD_GRAYSCALE);
+        if (grey.empty()) throw Error("cannot read " + image.image);
+        const fit::Landmarks2d points = core::readPts(image.pts).cast<double>();
+        const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+        const double yawInner = std::abs(fittedYaw(inner, camera, points, {})), yawFull = std::abs(fittedYaw(shipped, camera, points, {}));
+        for (Bin& bin : bins) {
+            if (yawInner < bin.from || yawInner >= bin.to) continue;
+            bin.full += yawFull;
+            bin.inner += yawInner;
+            bin.differences.push_back(yawFull - yawInner);
+        }
+        if (++faces % 100 == 0) std::fprintf(stderr, "\r%d faces", faces);
+    }
+    std::fprintf(stderr, "\r");
+    std::printf("%d %s crops: |yaw| of the shipped fit against that of the fit without the jaw's sides (the inner points'):\n", faces,
+                split.c_str());
+    for (Bin& bin : bins) {
+        if (bin.differences.empty()) continue;
+        std::nth_element(bin.differences.begin(), bin.differences.begin() + static_cast<std::ptrdiff_t>(bin.differences.size() / 2),
+                         bin.differences.end());
+        std::printf("  inner |yaw| %2.0f-%2.0f deg: %4zu faces, mean ratio %.3f, median difference %+.2f deg\n", bin.from, bin.to,
+                    bin.differences.size(), bin.full / bin.inner, bin.differences[bin.differences.size() / 2]);
+    }
+    return 0;
+}
+
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--profiled", "--labels", "--faces300w"}, {"--help"});
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--profiled", "--labels", "--faces300w", "--photographs"},
+                           {"--help"});
     if (args.has("--help")) {
-        std::puts("usage: turn_scale [--profiled build/profiled/validation] [--labels build/dense_labels] [--faces300w DIR]");
+        std::puts("usage: turn_scale [--profiled build/profiled/validation] [--labels build/dense_labels] [--faces300w DIR]\n"
+                  "       turn_scale --photographs train|validation|test [--faces300w DIR]");
         return 0;
     }
-    const std::string profiled = args.get("--profiled", "build/profiled/validation");
     const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
+    if (args.has("--photographs")) return photographs(root, args.get("--photographs"));
+    const std::string profiled = args.get("--profiled", "build/profiled/validation");
     const dense::LabelTable table = dense::readLabelTable(args.get("--labels", "build/dense_labels") + "/faces300w.csv");
     const dense::LabelColumns columns = dense::labelColumns(table, {});
     const int yawColumn = table.column("yaw_deg");
