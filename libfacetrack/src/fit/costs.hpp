@@ -16,13 +16,14 @@ namespace facetrack::fit {
 /// points), in units of the face size s (the eye-corner distance in pixels),
 /// each under a Huber loss rho:
 ///   e_i = (pi(R(omega) X_i + t) - u_i) / s,   X_i = X0_i + D_i b [+ B_i a]
-///   r_i = c(|e_i|^2) e_i,   c(q) = sqrt(rho(q) / q),   so that |r_i|^2 = rho(|e_i|^2),
+///   r_i = w_i c(|e_i|^2) e_i,   c(q) = sqrt(rho(q) / q),   so that |r_i|^2 = w_i^2 rho(|e_i|^2),
 ///   rho(q) = q for q <= delta^2, else 2 delta sqrt(q) - delta^2,
 /// with X0_i the slot's base shape (neutral with identity applied, or the
 /// plain neutral when identity a is a parameter too), D_i and B_i its
-/// expression and identity rows. The Jacobian is the exact one of r_i,
-///   dr_i = (c I + 2 c'(q) e_i e_i^T) de_i,
-/// so Gauss-Newton steps minimise sum rho exactly (test_fit's gradient check).
+/// expression and identity rows, w_i the point's factor (Inputs::weights; 1
+/// without). The Jacobian is the exact one of r_i,
+///   dr_i = w_i (c I + 2 c'(q) e_i e_i^T) de_i,
+/// so Gauss-Newton steps minimise sum w_i^2 rho exactly (test_fit's gradient check).
 /// (One block for all points, not one block each under a Ceres loss: Ceres's
 /// per-block bookkeeping cost more than the maths.)
 /// Parameter blocks: pose (omega, t) [6], expression b [E], and, with

@@ -48,12 +48,12 @@ struct FitSettings {
 bool isJawSide(int landmark);
 
 /// The weight of the jaw's side points in the fit of a face at `yawDeg` (the
-/// current estimate's; set when the contour is chosen). On a face turned past
-/// ~30 deg, where those points sit and where the model's silhouette does part
-/// ways: the 300-W training faces' annotated points fit 0.93x the inner points'
-/// yaw there, against 1.01-1.07x below 30 deg, and the exact points of face
-/// profiling's turned copies fit 0.94x the turn (1.00 without the jaw's sides).
-/// Weighed less there, they keep the face's width without reading turns short
+/// current estimate's, taken when the contour is chosen). Past ~30 deg of yaw
+/// those points and the model's silhouette part ways, and their pull reads the
+/// turn short: the 300-W training faces' annotated points fit 0.94x the inner
+/// points' yaw there (1.01-1.07x below 30 deg), the exact points of face
+/// profiling's turned copies 0.94x the turn (1.00 without the jaw's sides).
+/// Weighed less there, they still hold the face's width and pull the turn less
 /// (docs/fitting.md, "Turns").
 double jawSideWeight(const FitSettings& settings, double yawDeg);
 
