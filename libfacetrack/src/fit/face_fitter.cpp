@@ -52,6 +52,16 @@ double jawSideWeight(const FitSettings& s, double yawDeg) {
     return 1.0 - turned * (1.0 - s.jaw_turned_weight);
 }
 
+namespace {
+
+/// PointsCost's factor per landmark for a face at `yawDeg`: sqrt(jawSideWeight) on the jaw's sides, 1 elsewhere.
+void setPointFactors(const FitSettings& settings, double yawDeg, std::array<double, model::kLandmarkCount>& factors) {
+    const double jawSides = std::sqrt(jawSideWeight(settings, yawDeg));
+    for (int i = 0; i < model::kLandmarkCount; ++i) factors[static_cast<std::size_t>(i)] = isJawSide(i) ? jawSides : 1.0;
+}
+
+}  // namespace
+
 double eyeCornerDistance(const Landmarks2d& points) { return (points.col(36) - points.col(45)).norm(); }
 
 double faceScale(const Landmarks2d& points) {
@@ -276,8 +286,7 @@ void FaceFitter::chooseContour(bool nearest, FitReport& report) {
     report.contour = nearest ? nearestContourAt(*basis_, slots_, camera_, current_.pose, observed_)
                              : silhouetteContourAt(*basis_, slots_, camera_, current_.pose);
     for (int i = 0; i < kJaw; ++i) landmarks_->setSlot(i, report.contour[i]);
-    const double jawSides = std::sqrt(jawSideWeight(settings_, eulerDegrees(current_.omega()).y()));
-    for (int i = 0; i < kJaw; ++i) point_weights_[static_cast<std::size_t>(i)] = isJawSide(i) ? jawSides : 1.0;
+    setPointFactors(settings_, eulerDegrees(current_.omega()).y(), point_weights_);
 }
 
 FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm) {
@@ -337,8 +346,7 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
         auto& frame = frames[f];
         if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
         scales[f] = faceScale(frame.observed);
-        const double jawSides = std::sqrt(jawSideWeight(settings, eulerDegrees(frame.params.omega()).y()));
-        for (int i = 0; i < model::kLandmarkCount; ++i) weights[f][static_cast<std::size_t>(i)] = isJawSide(i) ? jawSides : 1.0;
+        setPointFactors(settings, eulerDegrees(frame.params.omega()).y(), weights[f]);
         auto* cost = new PointsCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber,
                                      weights[f].data()},
                                     landmarkSlots(basis), true);
