@@ -28,6 +28,10 @@ the validation sides, and the epoch is chosen on the points' score plus the read
 
     /usr/bin/python3 tools/train_refine/train_region.py --out build/region/e8 --widths 8,16,32,64 --strides 2,2,2,2 --hidden 128 \
         --profiled build/profiled --minutes 15 --expressions build/dense_labels/faces300w.csv --init build/region/c8.best.pt --lr 5e-4
+
+--region jaw (session 39, tried, not shipped: docs/cnn.md): the same for the jaw's sides, points 0-7 and their mirror
+images 16-9 (the chin stays the landmark refiner's), with a share each for the outer (0-4) and the lower jaw (5-7); the
+patch is 0.7 of its size across the side's taller extent. Not exported: the refine stage runs the brows and eyes' net.
 """
 import argparse, csv, math, os, re, time
 
@@ -40,9 +44,22 @@ from train_refine import MIRROR, Refiner, export_onnx, photometric, read_points,
 torch.set_flush_denormal(True)
 
 PIPELINE = "facetrack LBF + refiner"
-RIGHT = list(range(17, 22)) + list(range(36, 42))  # the subject's right brow and eye (image left)
+# --region: the subject's right side's points (image left), and the parts of them that each take their own share of the
+# net's answer. The jaw's sides leave the chin (point 8) to the landmark refiner: both sides would move it.
+REGIONS = {
+    "brows": (list(range(17, 22)) + list(range(36, 42)), (("brows", slice(0, 5)), ("eyes", slice(5, 11)))),
+    "jaw": (list(range(0, 8)), (("outer jaw", slice(0, 5)), ("lower jaw", slice(5, 8)))),
+}
+RIGHT, PARTS = REGIONS["brows"]
 LEFT = [MIRROR[i] for i in RIGHT]  # the same points of the other side, in the same order once mirrored
-BROWS, EYES = slice(0, 5), slice(5, 11)  # within a side's 11 points
+
+
+def use_region(name):
+    global RIGHT, PARTS, LEFT
+    RIGHT, PARTS = REGIONS[name]
+    LEFT = [MIRROR[i] for i in RIGHT]
+
+
 # --expressions: the side's brow shapes, read from its patch beside its points (dense teacher labels: MediaPipe's mesh
 # fitted with the face model, not ground truth). The right side's patch reads the subject's right brow (_R).
 EXPRESSIONS = ("browDown", "browInnerUp", "browOuterUp")
@@ -105,12 +122,12 @@ def read_expression_labels(path):
 
 
 def side_mean(shapes, size):
-    """Procrustes mean of the sides' annotated points, centred in the patch, 0.7 size wide."""
+    """Procrustes mean of the sides' annotated points, centred in the patch, 0.7 size across (wide or tall)."""
     ref = shapes[0] - shapes[0].mean(0)
     for _ in range(5):
         ref = np.mean([s @ A.T + t for s in shapes for A, t in [similarity(s, ref)]], 0)
         ref -= ref.mean(0)
-    ref *= 0.7 * size / np.ptp(ref[:, 0])
+    ref *= 0.7 * size / max(np.ptp(ref[:, 0]), np.ptp(ref[:, 1]))
     return ref + (size - 1) / 2.0
 
 
@@ -163,25 +180,31 @@ def score(sets, refined, share):
 
 
 def shares(sets, refined):
-    """The net's share, for the brows and for the eyes, with the lowest score (grid 0, 0.05, ..., 1)."""
+    """The net's share, for each part, with the lowest score (grid 0, 0.05, ..., 1)."""
     grid = np.linspace(0, 1, 21)
     best = {}
-    for name, part in (("brows", BROWS), ("eyes", EYES)):
+    for name, part in PARTS:
         scores = [sum(errors(w * r + (1 - w) * v.init, v)[:, part].mean() / errors(v.init, v)[:, part].mean()
                       for v, r in zip(sets, refined)) for w in grid]
         best[name] = grid[int(np.argmin(scores))]
     return best
 
 
-def blended(net_points, sides, share):
+def point_shares(share):
     w = np.zeros(len(RIGHT))
-    w[BROWS], w[EYES] = share["brows"], share["eyes"]
+    for name, part in PARTS:
+        w[part] = share[name]
+    return w
+
+
+def blended(net_points, sides, share):
+    w = point_shares(share)
     return w[None, :, None] * net_points + (1 - w[None, :, None]) * sides.init
 
 
 def summary(name, points, sides):
     e = errors(points, sides)
-    return f"{name}: brows {100 * e[:, BROWS].mean():.2f} %, eyes {100 * e[:, EYES].mean():.2f} %"
+    return f"{name}: " + ", ".join(f"{part} {100 * e[:, where].mean():.2f} %" for part, where in PARTS)
 
 
 def expression_summary(name, got, sides):
@@ -192,6 +215,26 @@ def expression_summary(name, got, sides):
         r = np.corrcoef(got[known, j], sides.expr[known, j])[0, 1]
         parts.append(f"{e} r {r:.2f} mae {np.abs(got[known, j] - sides.expr[known, j]).mean():.3f}")
     return f"{name}: " + ", ".join(parts)
+
+
+def turn_asymmetry(points):
+    """How far a face's 68 points look turned, from the points alone: along the eye line, the nose tip's distance to
+    one jaw side's (points 0-3) against the other's (13-16), (r - l) / (r + l); about 0 on a frontal face."""
+    eyes = (points[45] - points[36]) / np.linalg.norm(points[45] - points[36])
+    r, l = (points[30] - points[0:4].mean(0)) @ eyes, (points[13:17].mean(0) - points[30]) @ eyes
+    return (r - l) / (r + l)
+
+
+def by_turn(name, points, sides, refined, share):
+    """The pipeline's and the blend's errors on the side's points by the face's |turn_asymmetry| (the pipeline's points):
+    whether the net helps photographed turned faces too, not only face profiling's copies."""
+    turn = np.repeat([abs(turn_asymmetry(points[k][1])) for k in sides.keys], 2)  # both sides of each face
+    before, after = errors(sides.init, sides).mean(1), errors(blended(refined, sides, share), sides).mean(1)
+    for lo, hi in ((0, 0.1), (0.1, 0.2), (0.2, 0.3), (0.3, 0.5), (0.5, 2.0)):
+        m = (turn >= lo) & (turn < hi)
+        if m.any():
+            print(f"{name} |asymmetry| {lo}-{hi}: {m.sum() // 2} faces, pipeline {100 * before[m].mean():.2f} %, "
+                  f"blend {100 * after[m].mean():.2f} %")
 
 
 def whole_face(points_csv, names, sides, refined):
@@ -229,11 +272,13 @@ def main():
     p.add_argument("--lr", type=float, default=1e-3)
     p.add_argument("--evaluate", choices=["validation", "test"])
     p.add_argument("--export", action="store_true")
+    p.add_argument("--region", choices=sorted(REGIONS), default="brows")
     p.add_argument("--brows-only", action="store_true",
                    help="the eyes' share 0: their points stay the pipeline's (the gaze stage's synthetic renders read worse with the net's)")
     a = p.parse_args()
-    if a.export and a.expressions:
-        raise SystemExit("--export: the refine stage reads 22 outputs a side; a net with brow readings is not exported")
+    use_region(a.region)
+    if a.export and (a.expressions or a.region != "brows"):
+        raise SystemExit("--export: the refine stage runs the brows and eyes' net, 22 outputs a side (no brow readings)")
     torch.set_num_threads(a.threads)
     data = np.load(a.faces)
     names = list(data["names"])
@@ -278,14 +323,14 @@ def main():
         saved = torch.load(a.out + ".best.pt")
         net.load_state_dict(saved["net"])
         share = shares(sets, [predict(net, v, mean, a.size)[0] for v in sets])
-        if a.brows_only:
+        if a.brows_only and a.region == "brows":
             share["eyes"] = 0.0
-        sides = val
+        sides, evaluated = val, points["validation"]
         if a.evaluate == "test":
-            test = read_points(csv("test"), names, PIPELINE)
-            sides = Sides(data["images"], test, mean, test.keys(), labels=labels, names=names)
+            evaluated = read_points(csv("test"), names, PIPELINE)
+            sides = Sides(data["images"], evaluated, mean, evaluated.keys(), labels=labels, names=names)
         refined, readings = predict(net, sides, mean, a.size)
-        print(f"net's share (validation): brows {share['brows']:.2f}, eyes {share['eyes']:.2f}")
+        print("net's share (validation): " + ", ".join(f"{name} {share[name]:.2f}" for name, _ in PARTS))
         print(summary(f"{a.evaluate} pipeline", sides.init, sides))
         print(summary(f"{a.evaluate} net", refined, sides))
         print(summary(f"{a.evaluate} blend", blended(refined, sides, share), sides))
@@ -293,6 +338,7 @@ def main():
             print(expression_summary(f"{a.evaluate} brow readings", readings, sides))
         before, after = whole_face(csv(a.evaluate), names, sides, blended(refined, sides, share))
         print(f"{a.evaluate} 68-point NME: pipeline {100 * before:.2f} %, with the blend {100 * after:.2f} %")
+        by_turn(a.evaluate, evaluated, sides, refined, share)
         if a.evaluate == "validation" and len(sets) > 1:
             turned = sets[1]
             refined = predict(net, turned, mean, a.size)[0]
@@ -300,8 +346,7 @@ def main():
                 print(summary(f"turned validation copies {name} (over sqrt(box))", pts, turned))
         if a.export:
             export_onnx(net, a.size, a.out + ".onnx")
-            w = np.zeros(len(RIGHT))
-            w[BROWS], w[EYES] = share["brows"], share["eyes"]
+            w = point_shares(share)
             with open(a.out + ".side.txt", "w") as f:
                 f.write(f"{a.size}\n" + " ".join(f"{v:.6f}" for v in mean.reshape(-1)) + "\n" + " ".join(f"{v:.2f}" for v in w) + "\n")
             print(f"wrote {a.out}.onnx and {a.out}.side.txt")
@@ -350,7 +395,7 @@ def main():
             torch.save({"net": net.state_dict(), "mean": mean}, a.out + ".best.pt")
         turned = f"; turned copies' blend {summary('', blended(refined[1], sets[1], share), sets[1])}" if len(sets) > 1 else ""
         line = (f"epoch {epoch} lr {lr:.2e} loss {np.mean(losses):.4f} {summary('net', refined[0], val)}; blend "
-                f"(brows {share['brows']:.2f}, eyes {share['eyes']:.2f}) {summary('', blended(refined[0], val, share), val)}{turned}; "
+                f"({', '.join(f'{name} {share[name]:.2f}' for name, _ in PARTS)}) {summary('', blended(refined[0], val, share), val)}{turned}; "
                 f"{reading}score {now:.4f}, best {best:.4f} ({time.time() - start_time:.0f} s)")
         print(line, flush=True)
         log.write(line + "\n")
