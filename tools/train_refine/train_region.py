@@ -394,8 +394,9 @@ def main():
             best = now
             torch.save({"net": net.state_dict(), "mean": mean}, a.out + ".best.pt")
         turned = f"; turned copies' blend {summary('', blended(refined[1], sets[1], share), sets[1])}" if len(sets) > 1 else ""
+        shares_now = ", ".join(f"{name} {share[name]:.2f}" for name, _ in PARTS)
         line = (f"epoch {epoch} lr {lr:.2e} loss {np.mean(losses):.4f} {summary('net', refined[0], val)}; blend "
-                f"({', '.join(f'{name} {share[name]:.2f}' for name, _ in PARTS)}) {summary('', blended(refined[0], val, share), val)}{turned}; "
+                f"({shares_now}) {summary('', blended(refined[0], val, share), val)}{turned}; "
                 f"{reading}score {now:.4f}, best {best:.4f} ({time.time() - start_time:.0f} s)")
         print(line, flush=True)
         log.write(line + "\n")
