@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 namespace facetrack {
 namespace {
@@ -112,6 +113,39 @@ TEST(ShippedFaceModel, HasWhatTheTrackerNeeds) {
         EXPECT_LT(eye->iris_radius, 0.7f);
         EXPECT_GT(eye->optical_axis.z(), 0.95f);
     }
+}
+
+// The vertices of a subset are the whole mesh's, for any identity and expression; an index outside the mesh throws.
+TEST(ShippedFaceModel, TheVerticesOfASubsetAreTheWholeMeshs) {
+    const auto m = FaceModel::load(test::shippedFaceModel());
+    std::mt19937 rng(3);
+    std::normal_distribution<float> normal(0.f, 1.f);
+    std::uniform_real_distribution<float> unit(0.f, 1.f);
+    std::vector<float> identity(static_cast<std::size_t>(m->identityCount())), expression(m->expressionNames().size());
+    for (float& a : identity) a = normal(rng);
+    for (float& b : expression) b = unit(rng) < 0.3f ? unit(rng) : 0.f;
+    expression[26] = 0.8f;  // jawOpen: the chin's and lips' vertices move
+    std::vector<int> which = m->landmarkVertices();
+    which.push_back(0);
+    which.push_back(m->vertexCount() - 1);
+    for (const auto& [id, ex] : {std::pair{identity, expression}, std::pair{std::vector<float>{}, std::vector<float>{}}}) {
+        const std::vector<Vec3> mesh = m->vertices(id, ex);
+        std::vector<Vec3> subset;
+        m->vertices(id, ex, which, subset);
+        ASSERT_EQ(subset.size(), which.size());
+        for (std::size_t k = 0; k < which.size(); ++k) {
+            const Vec3& v = mesh[static_cast<std::size_t>(which[k])];
+            EXPECT_NEAR(subset[k].x, v.x, 1e-3f) << which[k];
+            EXPECT_NEAR(subset[k].y, v.y, 1e-3f) << which[k];
+            EXPECT_NEAR(subset[k].z, v.z, 1e-3f) << which[k];
+        }
+    }
+    EXPECT_GT(std::abs(m->vertices({}, expression)[static_cast<std::size_t>(m->landmarkVertices()[8])].y -
+                       m->vertices({}, {})[static_cast<std::size_t>(m->landmarkVertices()[8])].y), 1.f);  // the chin moved
+    std::vector<Vec3> out;
+    EXPECT_THROW(m->vertices({}, {}, {m->vertexCount()}, out), Error);
+    EXPECT_THROW(m->vertices({}, {}, {-1}, out), Error);
+    EXPECT_THROW(m->vertices({1.f}, {}, {0}, out), Error);
 }
 
 TEST(ShippedFaceModel, CorruptCopyGivesAClearError) {

@@ -54,7 +54,9 @@ Point2 eyeCentre(const Landmarks68& l, int first) {
 
 OpenSeeFaceEncoder::OpenSeeFaceEncoder(std::shared_ptr<const FaceModel> model) : model_(std::move(model)) {
     if (!model_) throw Error("OpenSeeFaceEncoder: no face model");
-    landmark_vertices_ = model_->landmarkVertices();
+    const std::vector<int> landmarkVertices = model_->landmarkVertices();
+    for (const int i : kOpenSeeFaceFromIbug) sent_vertices_.push_back(landmarkVertices[static_cast<std::size_t>(i)]);
+    sent_vertices_.push_back(landmarkVertices[30]);
 }
 
 void OpenSeeFaceEncoder::encode(const FrameResult& frame, double time, std::vector<std::uint8_t>& out) {
@@ -110,14 +112,14 @@ void OpenSeeFaceEncoder::encode(const FrameResult& frame, double time, std::vect
 
         // 3D points in the head frame, OpenSeeFace's axes and units, the nose
         // tip at x = y = 0, written as (x, -y, -z) as facetracker.py does.
-        model_->vertices(face.identity, expression ? expression->native : std::vector<float>{}, mesh_);
-        const Vec3 nose = mesh_[static_cast<std::size_t>(landmark_vertices_[30])];
+        model_->vertices(face.identity, expression ? expression->native : std::vector<float>{}, sent_vertices_, sent_points_);
+        const Vec3 nose = sent_points_.back();
         const auto put3 = [&](const Vec3& p) {
             w.f(-(p.x - nose.x) / kOpenSeeFaceUnitMm);
             w.f(-(p.y - nose.y) / kOpenSeeFaceUnitMm);
             w.f(-p.z / kOpenSeeFaceUnitMm);
         };
-        for (const int i : kOpenSeeFaceFromIbug) put3(mesh_[static_cast<std::size_t>(landmark_vertices_[static_cast<std::size_t>(i)])]);
+        for (std::size_t k = 0; k < kOpenSeeFaceFromIbug.size(); ++k) put3(sent_points_[k]);
         const EyeballGeometry right = model_->rightEyeball(), left = model_->leftEyeball();
         // The pupil on the eyeball's surface, along the gaze (head frame) or the rest axis.
         const auto pupil = [](const EyeballGeometry& e, const EyeGaze* g) {

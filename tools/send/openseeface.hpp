@@ -36,8 +36,8 @@ public:
 
 private:
     std::shared_ptr<const FaceModel> model_;
-    std::vector<int> landmark_vertices_;
-    std::vector<Vec3> mesh_;
+    std::vector<int> sent_vertices_;  ///< the 66 points' landmark vertices in OpenSeeFace's order, then the nose tip's
+    std::vector<Vec3> sent_points_;   ///< those vertices on the face's mesh (reused)
 };
 
 }  // namespace facetrack::send

@@ -93,6 +93,11 @@ public:
     /// The same into `out`, resized to vertexCount(): no allocation when it
     /// already has the capacity (reuse it frame to frame).
     void vertices(const std::vector<float>& identity, const std::vector<float>& expression, std::vector<Vec3>& out) const;
+    /// The vertices `which` (indices into vertices()) alone, in that order, into `out`: a few points
+    /// (a protocol's landmarks) at a small share of the whole mesh's cost. Throws Error as vertices()
+    /// does, and for an index outside the mesh.
+    void vertices(const std::vector<float>& identity, const std::vector<float>& expression, const std::vector<int>& which,
+                  std::vector<Vec3>& out) const;
 
     /// The mesh's triangles, as indices into vertices().
     std::vector<std::array<int, 3>> triangles() const;

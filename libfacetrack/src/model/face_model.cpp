@@ -7,6 +7,7 @@
 #include "model/arkit_mapping.hpp"
 #include "model/face_model_data.hpp"
 
+#include <algorithm>
 #include <filesystem>
 
 namespace facetrack {
@@ -90,8 +91,9 @@ std::vector<Vec3> FaceModel::vertices(const std::vector<float>& identity, const 
     return out;
 }
 
-void FaceModel::vertices(const std::vector<float>& identity, const std::vector<float>& expression, std::vector<Vec3>& out) const {
-    const auto& d = *data_;
+namespace {
+
+void checkCoefficients(const model::FaceModelData& d, const std::vector<float>& identity, const std::vector<float>& expression) {
     if (!identity.empty() && static_cast<int>(identity.size()) != d.identityCount()) {
         throw Error("FaceModel::vertices: " + std::to_string(identity.size()) + " identity coefficients given, the model has " +
                     std::to_string(d.identityCount()));
@@ -100,6 +102,13 @@ void FaceModel::vertices(const std::vector<float>& identity, const std::vector<f
         throw Error("FaceModel::vertices: " + std::to_string(expression.size()) + " expression weights given, the model has " +
                     std::to_string(d.expressions.size()));
     }
+}
+
+}  // namespace
+
+void FaceModel::vertices(const std::vector<float>& identity, const std::vector<float>& expression, std::vector<Vec3>& out) const {
+    const auto& d = *data_;
+    checkCoefficients(d, identity, expression);
     const int n = d.vertexCount();
     out.resize(static_cast<std::size_t>(n));
     if (n == 0) return;
@@ -123,6 +132,34 @@ void FaceModel::vertices(const std::vector<float>& identity, const std::vector<f
         }
     }
     flat *= 10.f;  // cm -> mm
+}
+
+void FaceModel::vertices(const std::vector<float>& identity, const std::vector<float>& expression, const std::vector<int>& which,
+                         std::vector<Vec3>& out) const {
+    const auto& d = *data_;
+    checkCoefficients(d, identity, expression);
+    for (const int i : which) {
+        if (i < 0 || i >= d.vertexCount()) throw Error("FaceModel::vertices: no vertex " + std::to_string(i));
+    }
+    out.resize(which.size());
+    // The same sum as above, for the rows of `which` only: the expressions' vertex lists are ascending, so each
+    // vertex's delta is found by a binary search.
+    for (std::size_t k = 0; k < which.size(); ++k) {
+        const auto i = static_cast<Eigen::Index>(which[k]);
+        Eigen::Vector3f v = d.neutral.col(i);
+        if (!identity.empty()) {
+            v.noalias() += d.identity_basis.middleRows(3 * i, 3) *
+                           Eigen::Map<const Eigen::VectorXf>(identity.data(), static_cast<Eigen::Index>(identity.size()));
+        }
+        for (std::size_t e = 0; e < expression.size(); ++e) {
+            if (expression[e] == 0.f) continue;
+            const auto& moving = d.expressions[e].vertices;
+            const auto at = std::lower_bound(moving.begin(), moving.end(), static_cast<std::uint32_t>(i));
+            if (at == moving.end() || *at != static_cast<std::uint32_t>(i)) continue;
+            v += expression[e] * d.expressions[e].deltas.col(at - moving.begin());
+        }
+        out[k] = {10.f * v.x(), 10.f * v.y(), 10.f * v.z()};  // cm -> mm
+    }
 }
 
 std::vector<std::array<int, 3>> FaceModel::triangles() const {
