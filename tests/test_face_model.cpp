@@ -7,6 +7,7 @@
 #include "model/face_model_data.hpp"
 #include "test_support.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>

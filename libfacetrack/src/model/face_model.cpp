@@ -142,15 +142,13 @@ void FaceModel::vertices(const std::vector<float>& identity, const std::vector<f
         if (i < 0 || i >= d.vertexCount()) throw Error("FaceModel::vertices: no vertex " + std::to_string(i));
     }
     out.resize(which.size());
+    const Eigen::Map<const Eigen::VectorXf> a(identity.data(), static_cast<Eigen::Index>(identity.size()));
     // The same sum as above, for the rows of `which` only: the expressions' vertex lists are ascending, so each
     // vertex's delta is found by a binary search.
     for (std::size_t k = 0; k < which.size(); ++k) {
         const auto i = static_cast<Eigen::Index>(which[k]);
         Eigen::Vector3f v = d.neutral.col(i);
-        if (!identity.empty()) {
-            v.noalias() += d.identity_basis.middleRows(3 * i, 3) *
-                           Eigen::Map<const Eigen::VectorXf>(identity.data(), static_cast<Eigen::Index>(identity.size()));
-        }
+        if (!identity.empty()) v.noalias() += d.identity_basis.middleRows(3 * i, 3) * a;
         for (std::size_t e = 0; e < expression.size(); ++e) {
             if (expression[e] == 0.f) continue;
             const auto& moving = d.expressions[e].vertices;
