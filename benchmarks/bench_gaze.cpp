@@ -10,6 +10,7 @@
 #include "core/image.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "gaze/gaze_stage.hpp"
+#include "model/internals.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -36,7 +37,7 @@ void timeGazeStage(benchmark::State& state, const Models& models, std::shared_pt
         if (!tracked) return;
         frames.push_back(std::move(*tracked));
     }
-    auto stage = gaze::makeGazeStage(std::move(eyes), models.face, true);
+    auto stage = gaze::makeGazeStage(std::move(eyes), models.face);
     auto faceState = stage->newFaceState();
     std::vector<pipeline::FaceTrack> faces(frames.size());
     std::vector<pipeline::FrameInput> inputs;
@@ -61,11 +62,11 @@ void BM_Gaze_BothEyes(benchmark::State& state) {
         return;
     }
     std::shared_ptr<const EyeModel> eyes = models.eyes;
-    const bool cnn = state.range(0) == 1 && !eyes->data().iris_net.empty();
-    if (state.range(0) == 0 && !eyes->data().iris_net.empty()) {
-        auto forest = std::make_shared<gaze::EyeModelData>(eyes->data());
-        forest->iris_net.clear();
-        eyes = std::make_shared<const EyeModel>(forest, eyes->sourcePath());
+    const bool cnn = state.range(0) == 1 && !model::dataOf(*eyes).iris_net.empty();
+    if (state.range(0) == 0 && !model::dataOf(*eyes).iris_net.empty()) {
+        gaze::EyeModelData forest = model::dataOf(*eyes);
+        forest.iris_net.clear();
+        eyes = model::Internals::make(std::move(forest), eyes->sourcePath());
     }
     state.SetLabel(cnn ? "iris CNN" : "pixel forest");
     timeGazeStage(state, models, eyes, {40});
@@ -81,7 +82,7 @@ void BM_Gaze_BothEyesFramesInTurn(benchmark::State& state) {
         failBenchmark(state, "no eye model (models/eye_model.ftm is shipped)");
         return;
     }
-    state.SetLabel(models.eyes->data().iris_net.empty() ? "pixel forest" : "iris CNN");
+    state.SetLabel(model::dataOf(*models.eyes).iris_net.empty() ? "pixel forest" : "iris CNN");
     std::vector<int> indices;
     for (int index = 40; index < 40 + 16 * 5; index += 5) indices.push_back(index);
     timeGazeStage(state, models, models.eyes, indices);

@@ -10,6 +10,7 @@
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"
 #include "landmarks/lbf.hpp"
+#include "model/internals.hpp"
 
 #include <opencv2/face.hpp>
 #include <opencv2/imgproc.hpp>
@@ -43,8 +44,8 @@ void BM_Landmarks_FacetrackLbf(benchmark::State& state) {
     if (skipWithoutShared(state, in.bgr)) return;
     const auto model = LandmarkModel::loadDefault();
     for (auto _ : state) {
-        const auto init = landmarks::shapeFromBox(model->data(), in.box, "yunet");
-        benchmark::DoNotOptimize(landmarks::alignLandmarks(model->data(), in.gray, init));
+        const auto init = landmarks::shapeFromBox(model::dataOf(*model), in.box, "yunet");
+        benchmark::DoNotOptimize(landmarks::alignLandmarks(model::dataOf(*model), in.gray, init));
     }
 }
 BENCHMARK(BM_Landmarks_FacetrackLbf)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
@@ -72,8 +73,8 @@ void BM_Landmarks_FacetrackLbfDefaultStarts(benchmark::State& state) {
     state.SetLabel(std::to_string(starts) + " starts" + (cold ? ", caches evicted" : ""));
     for (auto _ : state) {
         if (cold) evictCaches(state, scratch);
-        const auto init = landmarks::shapeFromBox(model->data(), in.box, "yunet");
-        benchmark::DoNotOptimize(landmarks::alignFromStarts(model->data(), in.gray, init, starts));
+        const auto init = landmarks::shapeFromBox(model::dataOf(*model), in.box, "yunet");
+        benchmark::DoNotOptimize(landmarks::alignFromStarts(model::dataOf(*model), in.gray, init, starts));
     }
 }
 BENCHMARK(BM_Landmarks_FacetrackLbfDefaultStarts)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));

@@ -34,7 +34,7 @@ void failBenchmark(benchmark::State& state, const std::string& why);
 struct TrackedFrame {
     cv::Mat frame, gray;
     FrameResult result;  ///< faces[0] is the followed face
-    fit::Camera camera;
+    core::Camera camera;
     pipeline::FrameInput input() const;
 };
 

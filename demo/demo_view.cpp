@@ -32,9 +32,10 @@ std::string timingLine(const std::vector<StageTiming>& timings) {
     double total = 0.0;
     char buf[64];
     for (const auto& t : timings) {
-        std::snprintf(buf, sizeof buf, "%s %.2f  ", t.stage.c_str(), t.ms);
-        line += buf;
         total += t.ms;
+        if (t.ms < 0.05) continue;  // where the time does not go: the line must fit its panel
+        std::snprintf(buf, sizeof buf, "%s %.1f  ", t.stage.c_str(), t.ms);
+        line += buf;
     }
     std::snprintf(buf, sizeof buf, "| %.1f ms", total);
     return line + buf;

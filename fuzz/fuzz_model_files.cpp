@@ -10,8 +10,8 @@
 // and is a finding, as is a crash or a sanitizer report.
 
 #include "core/binary_io.hpp"
-#include "cnn/cnn_model_data.hpp"
-#include "fit/landmark_convention.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "model/landmark_convention.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "landmarks/lbf_model.hpp"
 #include "model/face_model_data.hpp"
@@ -42,8 +42,8 @@ const Format kFormats[] = {
     {model::kFaceModelMagic, model::kFaceModelVersion, [](const std::string& p) { FaceModel::load(p); }},
     {landmarks::kLbfMagic, landmarks::kLbfVersion, [](const std::string& p) { LandmarkModel::load(p); }},
     {gaze::kEyeModelMagic, gaze::kEyeModelVersion, [](const std::string& p) { EyeModel::load(p); }},
-    {fit::kConventionMagic, fit::kConventionVersion, [](const std::string& p) { fit::readLandmarkConvention(p); }},
-    {cnn::kCnnModelMagic, cnn::kCnnModelVersion, [](const std::string& p) { CnnModel::load(p); }},
+    {model::kConventionMagic, model::kConventionVersion, [](const std::string& p) { model::readLandmarkConvention(p); }},
+    {expression::kCnnModelMagic, expression::kCnnModelVersion, [](const std::string& p) { CnnModel::load(p); }},
 };
 constexpr int kFormatCount = sizeof kFormats / sizeof kFormats[0];
 

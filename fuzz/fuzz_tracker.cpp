@@ -23,7 +23,7 @@
 
 #include "fuzz_common.hpp"
 
-#include "cnn/cnn_model_data.hpp"
+#include "nn/cnn_model_data.hpp"
 #include "core/binary_io.hpp"
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/error.hpp"
@@ -48,13 +48,13 @@ Tracker& tracker() {
 Tracker& cnnTracker() {
     static const std::unique_ptr<Tracker> t = [] {
         const std::string fixtures = std::string(FACETRACK_FUZZ_SOURCE_DIR) + "/tests/data/";
-        cnn::CnnModelData cascade;
+        nn::CnnModelData cascade;
         cascade.expressions = {"jawOpen"};
         cascade.stages.push_back({2, core::readFileBytes(fixtures + "cnn_parity.onnx", "fixture")});
         cascade.landmark_net = core::readFileBytes(fixtures + "cnn_landmarks_fixture.onnx", "fixture");
         cascade.provenance = "fuzz_tracker: the tests' fixture nets";
         const std::string path = (std::filesystem::temp_directory_path() / "facetrack_fuzz_cascade.ftm").string();
-        cnn::writeCnnModel(path, cascade);
+        nn::writeCnnModel(path, cascade);
         Models models = Models::loadDefault();
         models.cnn = CnnModel::load(path);
         return std::make_unique<Tracker>(models);

@@ -2,9 +2,10 @@
 // counting global operator new around Tracker::process on a real clip. Its own
 // program, so that the counting operator new sees nothing but this test.
 
-#include "cnn/cnn_model_data.hpp"
-#include "cnn/landmark_refiner.hpp"
-#include "cnn/patch_net.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "refine/landmark_refiner.hpp"
+#include "nn/patch_net.hpp"
 #include "facetrack/facetrack.hpp"
 #include "test_support.hpp"
 
@@ -98,7 +99,7 @@ TEST(Allocations, NonePerTrackedFrameAfterWarmUp) {
 
 // With the shipped CNN file too: its refiners cut their patches by hand (core::warpAffineGray),
 // its expression stage warps piecewise-affinely into buffers it keeps, and all run their nets on
-// the own kernels (core::ConvChain), so a tracked frame allocates nothing. One run of each
+// the own kernels (nn::ConvChain), so a tracked frame allocates nothing. One run of each
 // refiner is checked alone first, so that a failure says which one allocates.
 TEST(Allocations, NonePerTrackedFrameWithTheShippedNets) {
     FACETRACK_REQUIRE_SHARED();
@@ -107,18 +108,18 @@ TEST(Allocations, NonePerTrackedFrameWithTheShippedNets) {
     ASSERT_TRUE(models.cnn && models.cnn->hasRefiner());
     // One run of the refiner as the stage makes it (the aligned patch, the net, the blend) on a
     // frame of the clip, with the mean shape as LBF's points.
-    const cnn::CnnModelData& d = models.cnn->data();
-    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(d);
-    cnn::PatchNet net(d.refiner_net, layout.size, 136, "refiner");
+    const nn::CnnModelData& d = model::dataOf(*models.cnn);
+    const refine::RefinerLayout layout = refine::makeRefinerLayout(d);
+    nn::PatchNet net(d.refiner_net, layout.size, 136, "refiner");
     cv::Mat gray, patch;
     cv::cvtColor(test::clipFrames(1)[0], gray, cv::COLOR_BGR2GRAY);
     const landmarks::Shape68 points = (2.f * layout.mean).colwise() + Eigen::Vector2f(60.f, 40.f);
     for (int run = 0; run < 2; ++run) {  // the first warms
         const long before = allocations.load();
-        const core::Similarity toFrame = cnn::patchToFrame(layout, points);
-        cnn::warpAligned(layout, gray, toFrame, patch);
+        const core::Similarity toFrame = refine::patchToFrame(layout, points);
+        refine::warpAligned(layout, gray, toFrame, patch);
         const long afterWarp = allocations.load();
-        const landmarks::Shape68 refined = cnn::refinedLandmarks(layout, toFrame, net.predict(patch), points);
+        const landmarks::Shape68 refined = refine::refinedLandmarks(layout, toFrame, net.predict(patch), points);
         EXPECT_TRUE(refined.allFinite());
         if (run > 0) {
             EXPECT_EQ(afterWarp - before, 0) << "the refiner's patch cut allocated";
@@ -127,13 +128,13 @@ TEST(Allocations, NonePerTrackedFrameWithTheShippedNets) {
     }
     // And the brow and eye refiner's run on both sides at once.
     if (!d.side_net.empty()) {
-        const cnn::SideLayout sideLayout = cnn::makeSideLayout(d);
-        cnn::PatchNet sideNet(d.side_net, sideLayout.size, 22, "brow and eye refiner", 2);
+        const refine::SideLayout sideLayout = refine::makeSideLayout(d);
+        nn::PatchNet sideNet(d.side_net, sideLayout.size, 22, "brow and eye refiner", 2);
         std::array<cv::Mat, 2> sidePatches;
         for (int run = 0; run < 2; ++run) {
             const long before = allocations.load();
             landmarks::Shape68 refined = points;
-            cnn::refineSides(sideLayout, sideNet, gray, sidePatches, refined);
+            refine::refineSides(sideLayout, sideNet, gray, sidePatches, refined);
             EXPECT_TRUE(refined.allFinite());
             if (run > 0) {
                 EXPECT_EQ(allocations.load() - before, 0) << "the brow and eye refiner allocated";
@@ -158,7 +159,7 @@ TEST(Allocations, NonePerTrackedFrameWithACascade) {
     FACETRACK_REQUIRE_SHARED();
     if (!std::filesystem::exists(CnnModel::defaultPath())) GTEST_SKIP() << "no CNN file in models/";
     Models models = Models::loadDefault();
-    cnn::CnnModelData cascade = models.cnn->data();
+    nn::CnnModelData cascade = model::dataOf(*models.cnn);
     cascade.expressions = {"jawOpen"};
     cascade.expressions_only = cascade.corrects_fit = cascade.mirror_averaged = false;  // the shipped expression stage's
     cascade.neutral.clear();
@@ -166,7 +167,7 @@ TEST(Allocations, NonePerTrackedFrameWithACascade) {
     cascade.stages.assign(1, {2, test::fixtureBytes("cnn_parity.onnx")});
     cascade.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     const std::string path = test::tempPath("cascade_allocations.ftm");
-    cnn::writeCnnModel(path, cascade);
+    nn::writeCnnModel(path, cascade);
     models.cnn = CnnModel::load(path);
     ASSERT_TRUE(models.cnn->hasCascade() && models.cnn->hasLandmarkNet() && models.cnn->hasRefiner());
     long verifyFrames = 0, allocationsElsewhere = 0;

@@ -2,6 +2,7 @@
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
 #include "model/face_model_data.hpp"
+#include "model/internals.hpp"
 #include "test_support.hpp"
 
 #include <set>
@@ -51,12 +52,12 @@ TEST_F(ArkitMappingTest, PairsAreAveragedAndTongueOutIsZero) {
 
 TEST_F(ArkitMappingTest, LeftIsTheSubjectsLeft) {
     // ARKit's "Left" is the subject's left; in the model that is +x.
-    const auto& e = model->data().expressions;
+    const auto& e = model::dataOf(*model).expressions;
     const auto blinkLeft = std::find_if(e.begin(), e.end(), [](const auto& s) { return s.name == "eyeBlink_L"; });
     ASSERT_NE(blinkLeft, e.end());
     float weightedX = 0.f;
     for (std::size_t k = 0; k < blinkLeft->vertices.size(); ++k) {
-        weightedX += model->data().neutral(0, blinkLeft->vertices[k]) * blinkLeft->deltas.col(k).norm();
+        weightedX += model::dataOf(*model).neutral(0, blinkLeft->vertices[k]) * blinkLeft->deltas.col(k).norm();
     }
     EXPECT_GT(weightedX, 0.f);
 }

@@ -1,6 +1,6 @@
 // Runs the installed-to-be `facetrack` binary as a user would.
 
-#include "cnn/cnn_model_data.hpp"
+#include "nn/cnn_model_data.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -427,12 +427,12 @@ TEST(Cli, LandmarksComeFromThePipelineWithACascadesLandmarkNetAndFromLbfWithLbfO
         std::ifstream in(test::sourceDir() + "/tests/data/" + name, std::ios::binary);
         return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     };
-    cnn::CnnModelData cascade;
+    nn::CnnModelData cascade;
     cascade.expressions = {"jawOpen"};
     cascade.stages.push_back({1, bytes("cnn_parity.onnx")});
     cascade.landmark_net = bytes("cnn_landmarks_fixture.onnx");
     const std::string cascadePath = test::tempPath("cli_cascade.ftm");
-    cnn::writeCnnModel(cascadePath, cascade);
+    nn::writeCnnModel(cascadePath, cascade);
     const std::string image = test::tempPath("cli_landmarks.png");
     ASSERT_TRUE(cv::imwrite(image, test::clipFrames(1).at(0)));
 

@@ -4,14 +4,15 @@
 // the cascade's file format; the landmark net's geometry; the cnn stage wired into the Tracker;
 // the landmark refiner's geometry and its refine stage.
 
-#include "cnn/cnn_model_data.hpp"
-#include "cnn/landmark_net.hpp"
-#include "cnn/landmark_refiner.hpp"
-#include "cnn/refine_stage.hpp"
-#include "cnn/update_net.hpp"
-#include "core/conv_chain.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "expression/landmark_net.hpp"
+#include "refine/landmark_refiner.hpp"
+#include "refine/refine_stage.hpp"
+#include "expression/update_net.hpp"
+#include "nn/conv_chain.hpp"
 #include "core/image.hpp"
-#include "core/onnx_net.hpp"
+#include "nn/onnx_net.hpp"
 #include "core/pts.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
@@ -63,7 +64,7 @@ TEST(CnnExport, OpenCvDnnMatchesTorchOnStoredInputs) {
     EXPECT_LT(worst, 1e-4);
 }
 
-using core::OnnxNet;
+using nn::OnnxNet;
 
 /// Runs `net` on `input` (its N x C x H x W values).
 std::vector<float> run(OnnxNet& net, const std::vector<float>& input, int outputs) {
@@ -83,7 +84,7 @@ TEST(ConvChain, TheOwnKernelsMatchTorchOnStoredInputs) {
     const std::string onnx = test::fixtureBytes("cnn_parity.onnx");
     std::string whyNot;
     const cv::dnn::Net loaded = cv::dnn::readNetFromONNX(onnx.data(), onnx.size());
-    std::optional<core::ConvChain> chain = core::ConvChain::fromNet(loaded, {3, 1, 64, 64}, whyNot);
+    std::optional<nn::ConvChain> chain = nn::ConvChain::fromNet(loaded, {3, 1, 64, 64}, whyNot);
     ASSERT_TRUE(chain) << whyNot;
     std::vector<float> portable(expected.size());
     chain->forwardPortable(input.data(), portable.data());
@@ -114,11 +115,11 @@ std::vector<NamedNet> projectNets() {
     };
     if (std::filesystem::exists(CnnModel::defaultPath())) {
         const std::shared_ptr<const CnnModel> model = CnnModel::load(CnnModel::defaultPath());
-        const cnn::CnnModelData& d = model->data();
-        const int size = cnn::makeRefinerLayout(d).size;
+        const nn::CnnModelData& d = model::dataOf(*model);
+        const int size = refine::makeRefinerLayout(d).size;
         nets.push_back({"the shipped landmark refiner", d.refiner_net, {1, 1, size, size}, 136});
         if (!d.side_net.empty()) {
-            const int side = cnn::makeSideLayout(d).size;
+            const int side = refine::makeSideLayout(d).size;
             nets.push_back({"the shipped brow and eye refiner", d.side_net, {2, 1, side, side}, 2 * 22});
         }
     }
@@ -131,9 +132,9 @@ std::vector<NamedNet> projectNets() {
     }
     if (std::filesystem::exists(CnnModel::defaultPath())) {  // last: the nets above keep the inputs they were checked on
         const std::shared_ptr<const CnnModel> model = CnnModel::load(CnnModel::defaultPath());
-        const cnn::CnnModelData& d = model->data();
+        const nn::CnnModelData& d = model::dataOf(*model);
         const int updates = 6 + static_cast<int>(d.expressions.size());
-        for (const cnn::CnnStageData& stage : d.stages)  // a mirror-averaged stage reads two patches at a time
+        for (const nn::CnnStageData& stage : d.stages)  // a mirror-averaged stage reads two patches at a time
             nets.push_back({"a shipped cascade stage", stage.onnx, {2, 1, d.patch_size, d.patch_size}, 2 * updates});
     }
     return nets;
@@ -168,7 +169,7 @@ TEST(ConvChain, LeavesANetItDoesNotRunToOpenCvsDnn) {
     const std::string onnx = test::fixtureBytes("pooled_fixture.onnx");
     const cv::dnn::Net loaded = cv::dnn::readNetFromONNX(onnx.data(), onnx.size());
     std::string whyNot;
-    EXPECT_FALSE(core::ConvChain::fromNet(loaded, {1, 1, 16, 16}, whyNot));
+    EXPECT_FALSE(nn::ConvChain::fromNet(loaded, {1, 1, 16, 16}, whyNot));
     EXPECT_NE(whyNot.find("Pooling"), std::string::npos) << whyNot;
     OnnxNet net(onnx, {1, 1, 16, 16}, 5, "the pooled fixture", OnnxNet::Engine::Own);
     EXPECT_EQ(net.engine(), OnnxNet::Engine::OpenCvDnn);
@@ -180,8 +181,8 @@ TEST(ConvChain, LeavesANetItDoesNotRunToOpenCvsDnn) {
 
 /// A cascade of the parity fixture's net (random weights; 6 pose + 1 expression outputs): for
 /// the file format and the wiring, not for accuracy.
-cnn::CnnModelData parityCascade() {
-    cnn::CnnModelData m;
+nn::CnnModelData parityCascade() {
+    nn::CnnModelData m;
     m.expressions = {"jawOpen"};
     m.stages.push_back({2, test::fixtureBytes("cnn_parity.onnx")});
     m.provenance = "the export parity fixture";
@@ -189,43 +190,43 @@ cnn::CnnModelData parityCascade() {
 }
 
 TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
-    const cnn::CnnModelData m = parityCascade();
+    const nn::CnnModelData m = parityCascade();
     const std::string path = test::tempPath("cascade.ftm");
-    cnn::writeCnnModel(path, m);
+    nn::writeCnnModel(path, m);
     const auto loaded = CnnModel::load(path);
-    EXPECT_EQ(loaded->data().expressions, m.expressions);
+    EXPECT_EQ(model::dataOf(*loaded).expressions, m.expressions);
     ASSERT_EQ(loaded->rounds(), std::vector<int>{2});
-    EXPECT_EQ(loaded->data().stages[0].onnx, m.stages[0].onnx);
+    EXPECT_EQ(model::dataOf(*loaded).stages[0].onnx, m.stages[0].onnx);
     EXPECT_EQ(loaded->provenance(), m.provenance);
     EXPECT_FALSE(loaded->hasLandmarkNet());
     EXPECT_FALSE(loaded->expressionsOnly());
-    cnn::CnnModelData reading = m;
+    nn::CnnModelData reading = m;
     reading.expressions_only = true;
-    cnn::writeCnnModel(test::tempPath("cascade_expressions.ftm"), reading);
+    nn::writeCnnModel(test::tempPath("cascade_expressions.ftm"), reading);
     EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_expressions.ftm"))->expressionsOnly());
-    EXPECT_FALSE(CnnModel::load(test::tempPath("cascade_expressions.ftm"))->data().mirror_averaged);
+    EXPECT_FALSE(model::dataOf(*CnnModel::load(test::tempPath("cascade_expressions.ftm"))).mirror_averaged);
     reading.mirror_averaged = true;
     reading.corrects_fit = true;
-    cnn::writeCnnModel(test::tempPath("cascade_mirrored.ftm"), reading);
-    EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_mirrored.ftm"))->data().mirror_averaged);
-    EXPECT_TRUE(CnnModel::load(test::tempPath("cascade_mirrored.ftm"))->data().corrects_fit);
-    cnn::CnnModelData correctingAll = m;  // a cascade that refines everything has no fit's shapes to correct apart
+    nn::writeCnnModel(test::tempPath("cascade_mirrored.ftm"), reading);
+    EXPECT_TRUE(model::dataOf(*CnnModel::load(test::tempPath("cascade_mirrored.ftm"))).mirror_averaged);
+    EXPECT_TRUE(model::dataOf(*CnnModel::load(test::tempPath("cascade_mirrored.ftm"))).corrects_fit);
+    nn::CnnModelData correctingAll = m;  // a cascade that refines everything has no fit's shapes to correct apart
     correctingAll.corrects_fit = true;
-    EXPECT_THROW(cnn::writeCnnModel(test::tempPath("cascade_bad.ftm"), correctingAll), Error);
+    EXPECT_THROW(nn::writeCnnModel(test::tempPath("cascade_bad.ftm"), correctingAll), Error);
     for (const auto& [neutral, reported] : {std::pair<std::vector<float>, std::vector<bool>>{{0.1f, 0.2f}, {}}, {{}, {true, false}},
                                             {{1.f}, {}}, {{std::nanf("")}, {}}}) {
-        cnn::CnnModelData bad = reading;  // one expression: two values, or a neutral outside [0, 1)
+        nn::CnnModelData bad = reading;  // one expression: two values, or a neutral outside [0, 1)
         bad.neutral = neutral;
         bad.reported = reported;
-        EXPECT_THROW(cnn::writeCnnModel(test::tempPath("cascade_bad.ftm"), bad), Error);
+        EXPECT_THROW(nn::writeCnnModel(test::tempPath("cascade_bad.ftm"), bad), Error);
     }
-    cnn::CnnModelData withLandmarks = m;
+    nn::CnnModelData withLandmarks = m;
     withLandmarks.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
-    cnn::writeCnnModel(test::tempPath("cascade_landmarks.ftm"), withLandmarks);
+    nn::writeCnnModel(test::tempPath("cascade_landmarks.ftm"), withLandmarks);
     const auto reloaded = CnnModel::load(test::tempPath("cascade_landmarks.ftm"));
     EXPECT_TRUE(reloaded->hasLandmarkNet());
-    EXPECT_EQ(reloaded->data().landmark_net, withLandmarks.landmark_net);
-    EXPECT_THROW(cnn::PatchNet(withLandmarks.landmark_net, 64, 6 + 1, "landmark net"), Error);
+    EXPECT_EQ(model::dataOf(*reloaded).landmark_net, withLandmarks.landmark_net);
+    EXPECT_THROW(nn::PatchNet(withLandmarks.landmark_net, 64, 6 + 1, "landmark net"), Error);
     {
         std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
         f.seekp(200);
@@ -240,47 +241,47 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     EXPECT_THROW(CnnModel::load(test::tempPath("no_such_cascade.ftm")), Error);
     // A net of another output count, or not a net, is refused with its name.
     try {
-        cnn::PatchNet(m.stages[0].onnx, 64, 6 + 2, "stage 1");
+        nn::PatchNet(m.stages[0].onnx, 64, 6 + 2, "stage 1");
         ADD_FAILURE() << "a 7-output net passed for 6 + 2";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("stage 1 gives 7 outputs"), std::string::npos) << e.what();
     }
-    EXPECT_THROW(cnn::PatchNet("not an onnx file", 64, 6 + 1, "stage 1"), Error);
-    cnn::CnnModelData none = m;
+    EXPECT_THROW(nn::PatchNet("not an onnx file", 64, 6 + 1, "stage 1"), Error);
+    nn::CnnModelData none = m;
     none.stages.clear();
-    EXPECT_THROW(cnn::writeCnnModel(test::tempPath("empty.ftm"), none), Error);
+    EXPECT_THROW(nn::writeCnnModel(test::tempPath("empty.ftm"), none), Error);
 }
 
 TEST(CnnLandmarks, DisplacementsAreInPatchPixelsWhateverTheFacesPlaceSizeAndRoll) {
     const auto face = FaceModel::load(test::shippedFaceModel());
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(face->data(), {});
-    const fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*face), {});
+    const core::Camera camera = core::cameraFor(640, 480, 60.0, 0.0);
     fit::FaceParams params;
     // The face centre (WarpLayout::centre, ahead of the model origin) at 60 cm, then at 30 cm.
     params.pose.tail<3>() = Eigen::Vector3d(2.0, -1.0, 60.0) - layout.centre;
-    const Eigen::Matrix2d far = cnn::patchToFrame(layout, cnn::projectAnchors(layout, Eigen::VectorXd(), camera, params));
+    const Eigen::Matrix2d far = expression::patchToFrame(layout, expression::projectAnchors(layout, Eigen::VectorXd(), camera, params));
     params.pose.tail<3>() = Eigen::Vector3d(1.0, -0.5, 30.0) - layout.centre;
-    const Eigen::Matrix2d near = cnn::patchToFrame(layout, cnn::projectAnchors(layout, Eigen::VectorXd(), camera, params));
+    const Eigen::Matrix2d near = expression::patchToFrame(layout, expression::projectAnchors(layout, Eigen::VectorXd(), camera, params));
     EXPECT_NEAR(near.determinant() / far.determinant(), 4.0, 0.2);  // twice the size: four times the area
     EXPECT_NEAR(far(0, 1), 0.0, 0.02 * far(0, 0));  // upright: no shear or turn
     params.pose.head<3>() = fit::omegaFromEuler(Eigen::Vector3d(0.0, 0.0, 30.0));
-    const Eigen::Matrix2d rolled = cnn::patchToFrame(layout, cnn::projectAnchors(layout, Eigen::VectorXd(), camera, params));
+    const Eigen::Matrix2d rolled = expression::patchToFrame(layout, expression::projectAnchors(layout, Eigen::VectorXd(), camera, params));
     EXPECT_NEAR(std::abs(std::atan2(rolled(1, 0), rolled(0, 0))) * 180.0 / M_PI, 30.0, 1.0);
     EXPECT_NEAR(rolled.determinant(), near.determinant(), 0.05 * near.determinant());
     // Out and back.
     fit::Landmarks2d p = fit::Landmarks2d::Random() * 100.0;
-    Eigen::VectorXd d = Eigen::VectorXd::Random(cnn::kLandmarkOutputs) * 5.0;
-    EXPECT_LT((cnn::displacementsOf(rolled, p, cnn::displaced(rolled, p, d)) - d).cwiseAbs().maxCoeff(), 1e-9);
+    Eigen::VectorXd d = Eigen::VectorXd::Random(expression::kLandmarkOutputs) * 5.0;
+    EXPECT_LT((expression::displacementsOf(rolled, p, expression::displaced(rolled, p, d)) - d).cwiseAbs().maxCoeff(), 1e-9);
     // A displacement along the patch's x moves a point along the face's rolled x axis.
     d.setZero();
     d[0] = 1.0;
-    const Eigen::Vector2d moved = cnn::displaced(rolled, p, d).col(0) - p.col(0);
+    const Eigen::Vector2d moved = expression::displaced(rolled, p, d).col(0) - p.col(0);
     EXPECT_NEAR(std::abs(std::atan2(moved.y(), moved.x())) * 180.0 / M_PI, 30.0, 1.0);
 }
 
 TEST(PatchNet, ABatchGivesEachPatchItsOwnOutputs) {
     const std::string onnx = parityCascade().stages[0].onnx;
-    cnn::PatchNet one(onnx, 64, 6 + 1, "parity"), two(onnx, 64, 6 + 1, "parity, two at a time", 2);
+    nn::PatchNet one(onnx, 64, 6 + 1, "parity"), two(onnx, 64, 6 + 1, "parity, two at a time", 2);
     std::array<cv::Mat, 2> patches = {cv::Mat(64, 64, CV_8U), cv::Mat(64, 64, CV_8U)};
     cv::randu(patches[0], 0, 255);
     cv::randu(patches[1], 40, 90);
@@ -296,21 +297,21 @@ TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
     const auto face = FaceModel::load(test::shippedFaceModel());
     const auto& names = face->expressionNames();
     const int jawOpen = static_cast<int>(std::find(names.begin(), names.end(), "jawOpen") - names.begin());
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(face->data(), {jawOpen});
-    cnn::PatchNet net(parityCascade().stages[0].onnx, 64, 6 + 1, "parity");
-    cnn::RefineWork work;
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*face), {jawOpen});
+    nn::PatchNet net(parityCascade().stages[0].onnx, 64, 6 + 1, "parity");
+    expression::RefineWork work;
     work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
     const cv::Mat grey(480, 640, CV_8UC1, cv::Scalar(90));
-    const fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    const core::Camera camera = core::cameraFor(640, 480, 60.0, 0.0);
     fit::FaceParams params;
     params.expression = Eigen::VectorXd::Zero(1);
     params.pose[5] = 50.0;
-    EXPECT_TRUE(cnn::refine(layout, net, grey, camera, params, 2, work));
+    EXPECT_TRUE(expression::refine(layout, net, grey, camera, params, 2, work));
     EXPECT_TRUE(params.pose.allFinite());
     params.pose.tail<3>() << 0.0, 0.0, -40.0;  // behind the camera
-    EXPECT_FALSE(cnn::refine(layout, net, grey, camera, params, 2, work));
+    EXPECT_FALSE(expression::refine(layout, net, grey, camera, params, 2, work));
     params.pose[0] = std::nan("");
-    EXPECT_FALSE(cnn::refine(layout, net, grey, camera, params, 1, work));
+    EXPECT_FALSE(expression::refine(layout, net, grey, camera, params, 1, work));
 }
 
 // A mirror-averaged update (update_net.hpp). The fixture net reads the patch's left half into its first
@@ -319,33 +320,33 @@ TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
 // the flipped patch's update mirrored back, the pair reads 0.15 + 0.05 L and 0.15 - 0.05 L.
 TEST(CnnRefine, AMirrorAveragedUpdateIsThePatchsAndItsMirrorImagesUpdatesAveraged) {
     const std::vector<std::string> brows = {"browDown_L", "browDown_R"};
-    const cnn::UpdateMirror mirror = cnn::updateMirror(brows);
+    const expression::UpdateMirror mirror = expression::updateMirror(brows);
     EXPECT_EQ(mirror.order, (std::vector<int>{0, 1, 2, 3, 4, 5, 7, 6}));
     EXPECT_EQ(mirror.sign, (Eigen::VectorXd(8) << 1, -1, -1, -1, 1, 1, 1, 1).finished());
-    EXPECT_EQ(cnn::updateMirror({"jawOpen"}).order.back(), 6);
-    EXPECT_THROW(cnn::updateMirror({"browDown_L"}), Error);  // its partner is not read
+    EXPECT_EQ(expression::updateMirror({"jawOpen"}).order.back(), 6);
+    EXPECT_THROW(expression::updateMirror({"browDown_L"}), Error);  // its partner is not read
 
     const auto face = FaceModel::load(test::shippedFaceModel());
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(face->data(), cnn::expressionIndices(face->expressionNames(), brows));
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*face), nn::expressionIndices(face->expressionNames(), brows));
     const std::string onnx = test::fixtureBytes("mirror_fixture.onnx");
-    cnn::PatchNet one(onnx, 64, 8, "mirror fixture"), two(onnx, 64, 8, "mirror fixture, two at a time", 2);
+    nn::PatchNet one(onnx, 64, 8, "mirror fixture"), two(onnx, 64, 8, "mirror fixture, two at a time", 2);
     cv::Mat grey(480, 640, CV_8UC1);
     for (int x = 0; x < grey.cols; ++x) grey.col(x).setTo(30 + x / 4);  // darker to the image's left
-    const fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    const core::Camera camera = core::cameraFor(640, 480, 60.0, 0.0);
     fit::FaceParams alone;
     alone.expression = Eigen::VectorXd::Zero(2);
     alone.pose[5] = 50.0;
     fit::FaceParams averaged = alone;
-    cnn::RefineWork work;
+    expression::RefineWork work;
     work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
-    ASSERT_TRUE(cnn::refine(layout, one, grey, camera, alone, 1, work));
+    ASSERT_TRUE(expression::refine(layout, one, grey, camera, alone, 1, work));
     cv::Scalar mean, sigma;
     cv::meanStdDev(work.patch, mean, sigma);
     const double left = (cv::mean(work.patch.colRange(0, 32))[0] - mean[0]) / sigma[0];
     ASSERT_GT(std::abs(left), 0.3) << "the patch's halves must differ for the test to mean something";
     EXPECT_NEAR(alone.expression[0], 0.3 + 0.1 * left, 1e-4);
     EXPECT_NEAR(alone.expression[1], 0.0, 1e-6);
-    ASSERT_TRUE(cnn::refine(layout, two, grey, camera, averaged, 1, work, &mirror));
+    ASSERT_TRUE(expression::refine(layout, two, grey, camera, averaged, 1, work, &mirror));
     EXPECT_NEAR(averaged.expression[0], 0.15 + 0.05 * left, 1e-4);
     EXPECT_NEAR(averaged.expression[1], 0.15 - 0.05 * left, 1e-4);
     EXPECT_EQ(averaged.pose, alone.pose);  // no pose change either way
@@ -368,7 +369,7 @@ TrackerConfig unfiltered() {
 TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
     FACETRACK_REQUIRE_SHARED();
     const std::string path = test::tempPath("cascade_stage.ftm");
-    cnn::writeCnnModel(path, parityCascade());
+    nn::writeCnnModel(path, parityCascade());
     Models models = fitOnly();
     const TrackerConfig config = unfiltered();
     Tracker without(models, config);
@@ -427,7 +428,7 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
     for (const Case& c : {Case{"browDown_L", {}, {}, 0.3f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f},
                           Case{"browDown_L", {}, {false}, -1.f}, Case{"jawOpen", {}, {}, -1.f},
                           Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f, true}, Case{"jawOpen", {0.1f}, {}, -1.f, true}}) {
-        cnn::CnnModelData m;
+        nn::CnnModelData m;
         m.expressions = {c.shape};
         m.stages.push_back({1, test::fixtureBytes("cnn_expression_fixture.onnx")});
         m.expressions_only = true;
@@ -435,10 +436,10 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
         m.neutral = c.neutral;
         m.reported = c.reported;
         const std::string path = test::tempPath("cascade_reads_" + c.shape + ".ftm");
-        cnn::writeCnnModel(path, m);
+        nn::writeCnnModel(path, m);
         models.cnn = CnnModel::load(path);
-        EXPECT_EQ(models.cnn->data().neutral, c.neutral);
-        EXPECT_EQ(models.cnn->data().reported, c.reported);
+        EXPECT_EQ(model::dataOf(*models.cnn).neutral, c.neutral);
+        EXPECT_EQ(model::dataOf(*models.cnn).reported, c.reported);
         Tracker with(models, config);
         without.reset();
         EXPECT_EQ(with.estimatedShapes().size(), fitted.size() + (c.browDownLeft < 0.f ? 0 : 1)) << c.shape;
@@ -470,10 +471,10 @@ TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
     FACETRACK_REQUIRE_SHARED();
     // The fixture's net displaces every point by (+3, 0) patch pixels: the stage's landmarks must be
     // the projection of its own refined face, each moved by L (3, 0).
-    cnn::CnnModelData m = parityCascade();
+    nn::CnnModelData m = parityCascade();
     m.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     const std::string path = test::tempPath("cascade_landmark_stage.ftm");
-    cnn::writeCnnModel(path, m);
+    nn::writeCnnModel(path, m);
     Models models = Models::loadDefault();
     models.eyes = nullptr;
     models.cnn = CnnModel::load(path);
@@ -487,8 +488,8 @@ TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
 
     const auto& names = models.face->expressionNames();
     const int jawOpen = static_cast<int>(std::find(names.begin(), names.end(), "jawOpen") - names.begin());
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(models.face->data(), {jawOpen});
-    const fit::FitBasis basis = cnn::landmarkBasis(*models.face, {jawOpen});
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*models.face), {jawOpen});
+    const fit::FitBasis basis = expression::landmarkBasis(*models.face, {jawOpen});
     const auto frames = test::clipFrames(6);
     FrameResult out;
     int checked = 0;
@@ -503,10 +504,10 @@ TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
         params.expression = Eigen::VectorXd::Constant(1, r.expression->native[static_cast<std::size_t>(jawOpen)]);
         Eigen::VectorXd identity = Eigen::VectorXd::Zero(basis.identityCount());
         for (std::size_t k = 0; k < r.identity.size(); ++k) identity[static_cast<Eigen::Index>(k)] = r.identity[k];
-        const fit::Camera camera = fit::cameraFor(view.width, view.height, 60.0, 0.0);
-        const Eigen::Matrix2d toFrame = cnn::patchToFrame(layout, cnn::projectAnchors(layout, identity, camera, params));
+        const core::Camera camera = core::cameraFor(view.width, view.height, 60.0, 0.0);
+        const Eigen::Matrix2d toFrame = expression::patchToFrame(layout, expression::projectAnchors(layout, identity, camera, params));
         Eigen::Matrix3Xd slots;
-        const fit::Landmarks2d projected = cnn::projectedLandmarks(basis, fit::shapeWithIdentity(basis, identity), camera, params, slots);
+        const fit::Landmarks2d projected = expression::projectedLandmarks(basis, fit::shapeWithIdentity(basis, identity), camera, params, slots);
         const Eigen::Vector2d shift = toFrame * Eigen::Vector2d(3.0, 0.0);
         EXPECT_GT(shift.x(), 3.0);  // a patch pixel is more than a frame pixel on this clip's face
         double worst = 0.0;
@@ -523,8 +524,8 @@ TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
 
 // The landmark refiner (cnn/landmark_refiner.hpp): a mean shape in a 32 px patch for the fixture net
 // (tests/data/refiner_fixture.onnx: every offset (+3, 0) patch pixels, whatever the patch).
-cnn::CnnModelData refinerOnly(float share) {
-    cnn::CnnModelData m;
+nn::CnnModelData refinerOnly(float share) {
+    nn::CnnModelData m;
     m.refiner_net = test::fixtureBytes("refiner_fixture.onnx");
     m.refiner_patch_size = 32;
     for (int i = 0; i < 68; ++i) {  // points on an ellipse inside the patch
@@ -539,59 +540,59 @@ cnn::CnnModelData refinerOnly(float share) {
 
 TEST(CnnModelFile, HoldsALandmarkRefinerAloneOrBesideACascade) {
     const std::string path = test::tempPath("refiner.ftm");
-    cnn::writeCnnModel(path, refinerOnly(0.6f));
+    nn::writeCnnModel(path, refinerOnly(0.6f));
     const auto alone = CnnModel::load(path);
     EXPECT_TRUE(alone->hasRefiner());
     EXPECT_FALSE(alone->hasCascade());
-    EXPECT_EQ(alone->data().refiner_net, refinerOnly(0.6f).refiner_net);
-    EXPECT_EQ(alone->data().refiner_mean, refinerOnly(0.6f).refiner_mean);
-    EXPECT_EQ(alone->data().refiner_share, refinerOnly(0.6f).refiner_share);
-    EXPECT_EQ(alone->data().refiner_trust_to, 0.f);
-    cnn::CnnModelData ramped = refinerOnly(0.6f);
+    EXPECT_EQ(model::dataOf(*alone).refiner_net, refinerOnly(0.6f).refiner_net);
+    EXPECT_EQ(model::dataOf(*alone).refiner_mean, refinerOnly(0.6f).refiner_mean);
+    EXPECT_EQ(model::dataOf(*alone).refiner_share, refinerOnly(0.6f).refiner_share);
+    EXPECT_EQ(model::dataOf(*alone).refiner_trust_to, 0.f);
+    nn::CnnModelData ramped = refinerOnly(0.6f);
     ramped.refiner_trust_from = 0.03f, ramped.refiner_trust_to = 0.045f;
-    cnn::writeCnnModel(path, ramped);
-    EXPECT_EQ(CnnModel::load(path)->data().refiner_trust_from, 0.03f);
-    EXPECT_EQ(CnnModel::load(path)->data().refiner_trust_to, 0.045f);
+    nn::writeCnnModel(path, ramped);
+    EXPECT_EQ(model::dataOf(*CnnModel::load(path)).refiner_trust_from, 0.03f);
+    EXPECT_EQ(model::dataOf(*CnnModel::load(path)).refiner_trust_to, 0.045f);
     ramped.refiner_trust_to = 2.f;  // a disagreement of twice the face's size: corrupt
-    EXPECT_THROW(cnn::writeCnnModel(path, ramped), Error);
-    cnn::CnnModelData both = parityCascade();
-    const cnn::CnnModelData refiner = refinerOnly(0.6f);
+    EXPECT_THROW(nn::writeCnnModel(path, ramped), Error);
+    nn::CnnModelData both = parityCascade();
+    const nn::CnnModelData refiner = refinerOnly(0.6f);
     both.refiner_net = refiner.refiner_net;
     both.refiner_patch_size = refiner.refiner_patch_size;
     both.refiner_mean = refiner.refiner_mean;
     both.refiner_share = refiner.refiner_share;
-    cnn::writeCnnModel(path, both);
+    nn::writeCnnModel(path, both);
     EXPECT_TRUE(CnnModel::load(path)->hasRefiner());
     EXPECT_TRUE(CnnModel::load(path)->hasCascade());
-    cnn::writeCnnModel(path, parityCascade());
+    nn::writeCnnModel(path, parityCascade());
     EXPECT_FALSE(CnnModel::load(path)->hasRefiner());
 
-    cnn::CnnModelData bad = refinerOnly(1.5f);  // a share outside [0, 1]
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    nn::CnnModelData bad = refinerOnly(1.5f);  // a share outside [0, 1]
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
     bad = refinerOnly(0.5f);
     bad.refiner_mean.pop_back();
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
     bad = refinerOnly(0.5f);
     bad.refiner_mean[0] = 40.f;  // outside the 32 px patch
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
     bad = refinerOnly(0.5f);
     bad.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");  // it refines a cascade's face: needs stages
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
     bad = refinerOnly(0.5f);
     bad.mirror_averaged = true;  // no stage to average
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
 }
 
 TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
-    const cnn::CnnModelData m = refinerOnly(1.f);
-    cnn::RefinerLayout layout = cnn::makeRefinerLayout(m);
+    const nn::CnnModelData m = refinerOnly(1.f);
+    refine::RefinerLayout layout = refine::makeRefinerLayout(m);
     // LBF's points: the mean shape scaled 1.5x, turned 10 degrees and moved.
     core::Similarity placed;
     placed.scale = 1.5f;
     placed.angle = 10.f * static_cast<float>(M_PI) / 180.f;
     placed.translation = Eigen::Vector2f(20.f, 12.f);
     const landmarks::Shape68 lbf = placed.apply(layout.mean);
-    const core::Similarity toFrame = cnn::patchToFrame(layout, lbf);
+    const core::Similarity toFrame = refine::patchToFrame(layout, lbf);
     EXPECT_NEAR(toFrame.scale, 1.5f, 1e-4f);
     EXPECT_NEAR(toFrame.angle, placed.angle, 1e-4f);
     EXPECT_LT((toFrame.translation - placed.translation).norm(), 1e-3f);
@@ -600,7 +601,7 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
     for (int y = 0; y < frame.rows; ++y)
         for (int x = 0; x < frame.cols; ++x) frame.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(x + y);
     cv::Mat patch;
-    cnn::warpAligned(layout, frame, toFrame, patch);
+    refine::warpAligned(layout, frame, toFrame, patch);
     ASSERT_EQ(patch.size(), cv::Size(32, 32));
     for (const auto& [u, v] : {std::pair{0, 0}, {31, 0}, {16, 16}, {5, 27}, {31, 31}}) {
         const Eigen::Vector2f p = toFrame.apply(Eigen::Vector2f(float(u), float(v)));
@@ -609,54 +610,47 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
 
     const Eigen::VectorXd offsets = Eigen::Vector2d(3.0, 0.0).replicate(68, 1);
     const Eigen::Vector2f shift = toFrame.linear() * Eigen::Vector2f(3.f, 0.f);
-    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_LT((refine::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + shift)).cwiseAbs().maxCoeff(), 1e-3f);
     layout.share.setConstant(0.25f);  // a quarter of the way from LBF's points to the net's
-    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.25f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_LT((refine::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.25f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
 
     // The trust ramp: the net and LBF disagree by D = |shift| / sqrt(w h) of LBF's box.
     const Eigen::Array2f extent = lbf.rowwise().maxCoeff().array() - lbf.rowwise().minCoeff().array();
     const float disagreement = shift.norm() / std::sqrt(extent.x() * extent.y());
     layout.trust_from = 0.f;
     layout.trust_to = 2.f * disagreement;  // g = 0.5: w' = 0.25 + 0.5 (1 - 0.25)
-    EXPECT_NEAR(cnn::netTrust(layout, lbf.colwise() + shift, lbf), 0.5f, 1e-4f);
-    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.625f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_NEAR(refine::netTrust(layout, lbf.colwise() + shift, lbf), 0.5f, 1e-4f);
+    EXPECT_LT((refine::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.625f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
     layout.trust_to = 0.5f * disagreement;  // past the ramp: the net alone
-    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_LT((refine::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + shift)).cwiseAbs().maxCoeff(), 1e-3f);
     layout.trust_from = 1.5f * disagreement, layout.trust_to = 3.f * disagreement;  // below it: the shares
-    EXPECT_LT((cnn::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.25f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_LT((refine::refinedLandmarks(layout, toFrame, offsets, lbf) - (lbf.colwise() + 0.25f * shift)).cwiseAbs().maxCoeff(), 1e-3f);
     layout.trust_from = layout.trust_to = 0.f;  // no ramp (a version-4 file)
-    EXPECT_EQ(cnn::netTrust(layout, lbf.colwise() + 100.f * shift, lbf), 0.f);
+    EXPECT_EQ(refine::netTrust(layout, lbf.colwise() + 100.f * shift, lbf), 0.f);
 }
-
-/// Stands in for the landmarks stage the refine stage needs: the test gives the face's landmarks.
-struct GivenLandmarks final : pipeline::Stage {
-    StageInfo info() const override { return {"landmarks", true, "given"}; }
-    bool run(const pipeline::FrameInput&, pipeline::FaceTrack&, pipeline::StageState*) override { return true; }
-};
 
 TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrustsTheNet) {
     // The fixture moves every point by (+3, 0) patch pixels, so the net and LBF disagree alike on
     // every frame; a ramp below that disagreement trusts the net alone on any one frame (g = 1).
-    cnn::CnnModelData m = refinerOnly(0.25f);
+    nn::CnnModelData m = refinerOnly(0.25f);
     m.refiner_trust_from = 0.f, m.refiner_trust_to = 1e-4f;
     const std::string path = test::tempPath("refiner_trust.ftm");
-    cnn::writeCnnModel(path, m);
-    GivenLandmarks landmarks;
-    const auto stage = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
+    nn::writeCnnModel(path, m);
+    const auto stage = refine::makeRefineStage(CnnModel::load(path));
     ASSERT_TRUE(stage->info().available) << stage->info().detail;
     const auto state = stage->newFaceState();
     const cv::Mat gray(160, 160, CV_8U, cv::Scalar(128));
     const pipeline::FrameInput frame{ImageView{gray.data, gray.cols, gray.rows, gray.step, PixelFormat::Gray8}, gray,
-                                     fit::cameraFor(gray.cols, gray.rows, 60.0, 0.0), 1.0 / 30.0};
+                                     core::cameraFor(gray.cols, gray.rows, 60.0, 0.0), 1.0 / 30.0};
     core::Similarity placed;  // LBF's points: the mean shape twice as large, in the frame
     placed.scale = 2.f;
     placed.translation = Eigen::Vector2f(40.f, 30.f);
-    const landmarks::Shape68 lbf = placed.apply(cnn::makeRefinerLayout(m).mean);
+    const landmarks::Shape68 lbf = placed.apply(refine::makeRefinerLayout(m).mean);
     const auto shareOfTheNet = [&](bool fresh) {
         pipeline::FaceTrack face;
         face.fresh = fresh;
         face.result.landmarks = landmarks::toLandmarks68(lbf);
-        EXPECT_TRUE(stage->run(frame, face, state.get()));
+        EXPECT_EQ(stage->run(frame, face, state.get()), pipeline::Outcome::Ok);
         return ((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f;  // the net's shift: 3 patch px x 2
     };
     // g_t = (1 + g_{t-1}) / 2 from the state's 0: w' = 0.25 + g 0.75. With g > 0 a second round
@@ -672,19 +666,19 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrus
 
     // A ramp beyond the disagreement (g = 0): one round, the net's share alone.
     m.refiner_trust_from = 0.5f, m.refiner_trust_to = 0.6f;
-    cnn::writeCnnModel(path, m);
-    const auto untrusting = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
+    nn::writeCnnModel(path, m);
+    const auto untrusting = refine::makeRefineStage(CnnModel::load(path));
     pipeline::FaceTrack face;
     face.fresh = true;
     face.result.landmarks = landmarks::toLandmarks68(lbf);
-    EXPECT_TRUE(untrusting->run(frame, face, untrusting->newFaceState().get()));
+    EXPECT_EQ(untrusting->run(frame, face, untrusting->newFaceState().get()), pipeline::Outcome::Ok);
     EXPECT_NEAR(((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f, 0.25f, 1e-3f);
 }
 
 // The brow and eye refiner (landmark_refiner.hpp, one side at a time): a mean shape of one side in a
 // 32 px patch for the fixture net (tests/data/side_fixture.onnx: every offset (+3, 0) patch pixels).
-cnn::CnnModelData withSides(float share) {
-    cnn::CnnModelData m = refinerOnly(0.f);
+nn::CnnModelData withSides(float share) {
+    nn::CnnModelData m = refinerOnly(0.f);
     m.side_net = test::fixtureBytes("side_fixture.onnx");
     m.side_patch_size = 32;
     for (int i = 0; i < 11; ++i) {  // a brow above an eye, both inside the patch
@@ -697,29 +691,29 @@ cnn::CnnModelData withSides(float share) {
 
 TEST(CnnModelFile, HoldsABrowAndEyeRefinerBesideTheLandmarkRefiner) {
     const std::string path = test::tempPath("sides.ftm");
-    cnn::writeCnnModel(path, withSides(0.5f));
+    nn::writeCnnModel(path, withSides(0.5f));
     const auto loaded = CnnModel::load(path);
-    EXPECT_EQ(loaded->data().side_net, withSides(0.5f).side_net);
-    EXPECT_EQ(loaded->data().side_mean, withSides(0.5f).side_mean);
-    EXPECT_EQ(loaded->data().side_share, withSides(0.5f).side_share);
-    cnn::writeCnnModel(path, refinerOnly(0.5f));
-    EXPECT_TRUE(CnnModel::load(path)->data().side_net.empty());
+    EXPECT_EQ(model::dataOf(*loaded).side_net, withSides(0.5f).side_net);
+    EXPECT_EQ(model::dataOf(*loaded).side_mean, withSides(0.5f).side_mean);
+    EXPECT_EQ(model::dataOf(*loaded).side_share, withSides(0.5f).side_share);
+    nn::writeCnnModel(path, refinerOnly(0.5f));
+    EXPECT_TRUE(model::dataOf(*CnnModel::load(path)).side_net.empty());
 
-    cnn::CnnModelData bad = withSides(0.5f);  // it refines the landmark refiner's answer: needs it
+    nn::CnnModelData bad = withSides(0.5f);  // it refines the landmark refiner's answer: needs it
     bad.refiner_net.clear();
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
     bad = withSides(1.5f);
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
     bad = withSides(0.5f);
     bad.side_mean.pop_back();
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
     bad = withSides(0.5f);
     bad.side_mean[0] = 40.f;  // outside the 32 px patch
-    EXPECT_THROW(cnn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
 }
 
 TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
-    const cnn::SideLayout layout = cnn::makeSideLayout(withSides(1.f));
+    const refine::SideLayout layout = refine::makeSideLayout(withSides(1.f));
     // A frame and a face, and both mirrored: x -> 99 - x, the points renumbered as the mirror maps them.
     cv::Mat frame(80, 100, CV_8U);  // I(x, y) = x + y: smooth, so that bilinear sampling is exact to a level
     for (int y = 0; y < frame.rows; ++y)
@@ -730,79 +724,78 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
     core::Similarity right, left;  // each side's mean shape placed in the frame, turned and scaled differently
     right.scale = 1.2f, right.angle = 0.1f, right.translation = Eigen::Vector2f(10.f, 15.f);
     left.scale = 1.4f, left.angle = -0.05f, left.translation = Eigen::Vector2f(8.f, 12.f);
-    const cnn::SideShape rightPoints = right.apply(layout.mean), leftMirrored = left.apply(layout.mean);
-    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {
-        face.col(cnn::kRightSide[i]) = rightPoints.col(static_cast<Eigen::Index>(i));
-        face.col(cnn::kLeftSide[i]) = Eigen::Vector2f(99.f - leftMirrored(0, static_cast<Eigen::Index>(i)), leftMirrored(1, static_cast<Eigen::Index>(i)));
+    const refine::SideShape rightPoints = right.apply(layout.mean), leftMirrored = left.apply(layout.mean);
+    for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {
+        face.col(refine::kRightSide[i]) = rightPoints.col(static_cast<Eigen::Index>(i));
+        face.col(refine::kLeftSide[i]) = Eigen::Vector2f(99.f - leftMirrored(0, static_cast<Eigen::Index>(i)), leftMirrored(1, static_cast<Eigen::Index>(i)));
     }
     landmarks::Shape68 mirroredFace;
-    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {  // the mirror image's right side is this face's left
-        mirroredFace.col(cnn::kRightSide[i]) = Eigen::Vector2f(99.f - face(0, cnn::kLeftSide[i]), face(1, cnn::kLeftSide[i]));
-        mirroredFace.col(cnn::kLeftSide[i]) = Eigen::Vector2f(99.f - face(0, cnn::kRightSide[i]), face(1, cnn::kRightSide[i]));
+    for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {  // the mirror image's right side is this face's left
+        mirroredFace.col(refine::kRightSide[i]) = Eigen::Vector2f(99.f - face(0, refine::kLeftSide[i]), face(1, refine::kLeftSide[i]));
+        mirroredFace.col(refine::kLeftSide[i]) = Eigen::Vector2f(99.f - face(0, refine::kRightSide[i]), face(1, refine::kRightSide[i]));
     }
-    EXPECT_LT((cnn::sidePoints(face, true, frame.cols) - leftMirrored).cwiseAbs().maxCoeff(), 1e-4f);
-    EXPECT_LT((cnn::sidePoints(face, false, frame.cols) - rightPoints).cwiseAbs().maxCoeff(), 1e-4f);
+    EXPECT_LT((refine::sidePoints(face, true, frame.cols) - leftMirrored).cwiseAbs().maxCoeff(), 1e-4f);
+    EXPECT_LT((refine::sidePoints(face, false, frame.cols) - rightPoints).cwiseAbs().maxCoeff(), 1e-4f);
 
     // The right side's patch is the frame at the similarity; the left side's is the mirror image's right side's.
     cv::Mat patch, mirrorPatch;
-    const cv::Matx23d rightToFrame = cnn::sidePatchToFrame(layout, cnn::sidePoints(face, false, frame.cols), false, frame.cols);
-    cnn::warpSide(layout, frame, rightToFrame, patch);
+    const cv::Matx23d rightToFrame = refine::sidePatchToFrame(layout, refine::sidePoints(face, false, frame.cols), false, frame.cols);
+    refine::warpSide(layout, frame, rightToFrame, patch);
     ASSERT_EQ(patch.size(), cv::Size(32, 32));
     for (const auto& [u, v] : {std::pair{3, 4}, {16, 16}, {28, 9}}) {
         const Eigen::Vector2f p = right.apply(Eigen::Vector2f(float(u), float(v)));
         EXPECT_NEAR(patch.at<std::uint8_t>(v, u), p.x() + p.y(), 1.0) << u << "," << v;
     }
-    const cv::Matx23d leftToFrame = cnn::sidePatchToFrame(layout, cnn::sidePoints(face, true, frame.cols), true, frame.cols);
-    cnn::warpSide(layout, frame, leftToFrame, patch);
-    cnn::warpSide(layout, flipped, cnn::sidePatchToFrame(layout, cnn::sidePoints(mirroredFace, false, flipped.cols), false, flipped.cols),
+    const cv::Matx23d leftToFrame = refine::sidePatchToFrame(layout, refine::sidePoints(face, true, frame.cols), true, frame.cols);
+    refine::warpSide(layout, frame, leftToFrame, patch);
+    refine::warpSide(layout, flipped, refine::sidePatchToFrame(layout, refine::sidePoints(mirroredFace, false, flipped.cols), false, flipped.cols),
                   mirrorPatch);
     EXPECT_LE(cv::norm(patch, mirrorPatch, cv::NORM_INF), 1.0);
 
     // Offsets of (+3, 0) patch pixels move the right side's points by B (3, 0) and the left side's by its mirror image.
     const Eigen::VectorXd offsets = Eigen::Vector2d(3.0, 0.0).replicate(11, 1);
     landmarks::Shape68 moved = face;
-    cnn::placeSide(layout, rightToFrame, offsets, false, moved);
-    cnn::placeSide(layout, leftToFrame, offsets, true, moved);
+    refine::placeSide(layout, rightToFrame, offsets, false, moved);
+    refine::placeSide(layout, leftToFrame, offsets, true, moved);
     const Eigen::Vector2f rightShift = right.linear() * Eigen::Vector2f(3.f, 0.f);
     Eigen::Vector2f leftShift = left.linear() * Eigen::Vector2f(3.f, 0.f);
     leftShift.x() = -leftShift.x();
-    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {
-        EXPECT_LT((moved.col(cnn::kRightSide[i]) - face.col(cnn::kRightSide[i]) - rightShift).norm(), 1e-3f) << i;
-        EXPECT_LT((moved.col(cnn::kLeftSide[i]) - face.col(cnn::kLeftSide[i]) - leftShift).norm(), 1e-3f) << i;
+    for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {
+        EXPECT_LT((moved.col(refine::kRightSide[i]) - face.col(refine::kRightSide[i]) - rightShift).norm(), 1e-3f) << i;
+        EXPECT_LT((moved.col(refine::kLeftSide[i]) - face.col(refine::kLeftSide[i]) - leftShift).norm(), 1e-3f) << i;
     }
     EXPECT_EQ(moved.col(30), face.col(30));  // the nose is not a side's
 }
 
 TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
     const std::string path = test::tempPath("refiner_sides.ftm");
-    cnn::writeCnnModel(path, withSides(0.5f));  // the landmark refiner's share is 0: it keeps LBF's points
-    GivenLandmarks landmarks;
-    const auto stage = cnn::makeRefineStage(CnnModel::load(path), &landmarks);
+    nn::writeCnnModel(path, withSides(0.5f));  // the landmark refiner's share is 0: it keeps LBF's points
+    const auto stage = refine::makeRefineStage(CnnModel::load(path));
     ASSERT_TRUE(stage->info().available) << stage->info().detail;
     EXPECT_NE(stage->info().detail.find("brows and eyes"), std::string::npos) << stage->info().detail;
     const cv::Mat gray(160, 160, CV_8U, cv::Scalar(128));
     const pipeline::FrameInput frame{ImageView{gray.data, gray.cols, gray.rows, gray.step, PixelFormat::Gray8}, gray,
-                                     fit::cameraFor(gray.cols, gray.rows, 60.0, 0.0), 1.0 / 30.0};
+                                     core::cameraFor(gray.cols, gray.rows, 60.0, 0.0), 1.0 / 30.0};
     // LBF's points: the refiner's mean shape twice as large, in the frame, with each side's brow and eye
     // the side's mean shape twice as large (the left one mirrored).
     core::Similarity placed;
     placed.scale = 2.f;
     placed.translation = Eigen::Vector2f(40.f, 30.f);
-    landmarks::Shape68 lbf = placed.apply(cnn::makeRefinerLayout(withSides(0.5f)).mean);
-    const cnn::SideLayout layout = cnn::makeSideLayout(withSides(0.5f));
-    for (std::size_t i = 0; i < cnn::kRightSide.size(); ++i) {
+    landmarks::Shape68 lbf = placed.apply(refine::makeRefinerLayout(withSides(0.5f)).mean);
+    const refine::SideLayout layout = refine::makeSideLayout(withSides(0.5f));
+    for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {
         const Eigen::Vector2f p = 2.f * layout.mean.col(static_cast<Eigen::Index>(i)) + Eigen::Vector2f(20.f, 40.f);
-        lbf.col(cnn::kRightSide[i]) = p;
-        lbf.col(cnn::kLeftSide[i]) = Eigen::Vector2f(159.f - p.x(), p.y());
+        lbf.col(refine::kRightSide[i]) = p;
+        lbf.col(refine::kLeftSide[i]) = Eigen::Vector2f(159.f - p.x(), p.y());
     }
     pipeline::FaceTrack face;
     face.fresh = true;
     face.result.landmarks = landmarks::toLandmarks68(lbf);
-    ASSERT_TRUE(stage->run(frame, face, stage->newFaceState().get()));
+    ASSERT_EQ(stage->run(frame, face, stage->newFaceState().get()), pipeline::Outcome::Ok);
     const landmarks::Shape68 got = landmarks::fromLandmarks68(*face.result.landmarks);
     for (const bool mirrored : {false, true}) {
         const Eigen::Vector2f shift(mirrored ? -6.f : 6.f, 0.f);  // the net's (+3, 0) patch pixels, twice as large, mirrored
-        for (const int i : mirrored ? cnn::kLeftSide : cnn::kRightSide) {
+        for (const int i : mirrored ? refine::kLeftSide : refine::kRightSide) {
             EXPECT_LT((got.col(i) - lbf.col(i) - 0.5f * shift).norm(), 1e-3f) << i;  // half way to the net's points
         }
     }
@@ -812,7 +805,7 @@ TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
     pipeline::FaceTrack collapsed;
     collapsed.fresh = true;
     collapsed.result.landmarks = landmarks::toLandmarks68(landmarks::Shape68::Constant(80.f));
-    ASSERT_TRUE(stage->run(frame, collapsed, stage->newFaceState().get()));
+    ASSERT_EQ(stage->run(frame, collapsed, stage->newFaceState().get()), pipeline::Outcome::Ok);
     EXPECT_TRUE(landmarks::fromLandmarks68(*collapsed.result.landmarks).allFinite());
 }
 
@@ -823,13 +816,13 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     plain.cnn = nullptr;
     // A face for a mean shape (LBF's, 22 px wide in the patch), so that the fit after the stage still
     // holds the face: the answer is a quarter of the way from LBF's points to the net's.
-    cnn::CnnModelData m = refinerOnly(0.25f);
-    const landmarks::Shape68& lbfMean = plain.landmarks->data().mean_shape;
+    nn::CnnModelData m = refinerOnly(0.25f);
+    const landmarks::Shape68& lbfMean = model::dataOf(*plain.landmarks).mean_shape;
     const float width = lbfMean.row(0).maxCoeff() - lbfMean.row(0).minCoeff();
     const landmarks::Shape68 mean = ((lbfMean.colwise() - lbfMean.rowwise().mean()) * (22.f / width)).colwise() + Eigen::Vector2f(15.5f, 16.f);
     m.refiner_mean.assign(mean.data(), mean.data() + 136);
     const std::string path = test::tempPath("refiner_stage.ftm");
-    cnn::writeCnnModel(path, m);
+    nn::writeCnnModel(path, m);
     Models refined = plain;
     refined.cnn = CnnModel::load(path);
     TrackerConfig config;
@@ -844,7 +837,7 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     EXPECT_FALSE(find("cnn").available);
     EXPECT_NE(find("cnn").detail.find("has no cascade stages"), std::string::npos) << find("cnn").detail;
 
-    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(m);
+    const refine::RefinerLayout layout = refine::makeRefinerLayout(m);
     FrameResult lbfOut, out;
     int checked = 0;
     for (const cv::Mat& frame : test::clipFrames(3)) {
@@ -856,7 +849,7 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
         ASSERT_EQ(lbfOut.faces.size(), 1u);
         ASSERT_EQ(out.faces.size(), 1u);
         const landmarks::Shape68 lbf = landmarks::fromLandmarks68(*lbfOut.faces[0].landmarks);
-        const core::Similarity toFrame = cnn::patchToFrame(layout, lbf);
+        const core::Similarity toFrame = refine::patchToFrame(layout, lbf);
         const Eigen::Vector2f shift = toFrame.linear() * Eigen::Vector2f(3.f, 0.f);
         const landmarks::Shape68 got = landmarks::fromLandmarks68(*out.faces[0].landmarks);
         // A quarter of the way to the net's points, A (m + (3, 0)) + t, from LBF's.
@@ -878,9 +871,9 @@ TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
     if (!std::filesystem::exists(path)) GTEST_SKIP() << "models/cnn_cascade.ftm is not shipped";
     const auto model = CnnModel::load(path);
     ASSERT_TRUE(model->hasRefiner());
-    const cnn::CnnModelData& d = model->data();
-    const cnn::RefinerLayout layout = cnn::makeRefinerLayout(d);
-    cnn::PatchNet net(d.refiner_net, layout.size, 136, "the shipped refiner");
+    const nn::CnnModelData& d = model::dataOf(*model);
+    const refine::RefinerLayout layout = refine::makeRefinerLayout(d);
+    nn::PatchNet net(d.refiner_net, layout.size, 136, "the shipped refiner");
     const auto lbf = LandmarkModel::loadDefault();
     DetectorConfig config;
     config.kind = DetectorKind::YuNet;
@@ -895,10 +888,10 @@ TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
         ASSERT_FALSE(found.empty()) << stem;
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
         const landmarks::Shape68 points = landmarks::alignFromStarts(
-            lbf->data(), gray, landmarks::shapeFromBox(lbf->data(), found[0].box, "yunet"), TrackerConfig{}.landmark_starts);
-        const core::Similarity toFrame = cnn::patchToFrame(layout, points);
-        cnn::warpAligned(layout, gray, toFrame, patch);
-        const landmarks::Shape68 refined = cnn::refinedLandmarks(layout, toFrame, net.predict(patch), points);
+            model::dataOf(*lbf), gray, landmarks::shapeFromBox(model::dataOf(*lbf), found[0].box, "yunet"), TrackerConfig{}.landmark_starts);
+        const core::Similarity toFrame = refine::patchToFrame(layout, points);
+        refine::warpAligned(layout, gray, toFrame, patch);
+        const landmarks::Shape68 refined = refine::refinedLandmarks(layout, toFrame, net.predict(patch), points);
         lbfSum += core::nme68(core::Shape2(points), truth);
         refinedSum += core::nme68(core::Shape2(refined), truth);
         ++count;

@@ -7,6 +7,7 @@
 #include "dense/mediapipe_mesh.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
+#include "model/internals.hpp"
 #include "test_support.hpp"
 
 #include <fstream>
@@ -88,7 +89,7 @@ std::vector<fit::SurfacePoint> spreadPoints(const model::FaceModelData& data) {
 
 TEST(DenseFit, RecoversPoseAndObservableExpressionsOfSyntheticFaces) {
     const auto model = FaceModel::load(test::shippedFaceModel());
-    const auto& data = model->data();
+    const auto& data = model::dataOf(*model);
     const auto points = spreadPoints(data);
     ASSERT_GT(points.size(), 150u);
     const auto observable = fit::observableExpressions(data, points);
@@ -116,7 +117,7 @@ TEST(DenseFit, RecoversPoseAndObservableExpressionsOfSyntheticFaces) {
         truth.expression = Eigen::VectorXd::Zero(m.basis.expressionCount());
         for (auto& b : truth.expression) b = unit(rng) < 0.3 ? unit(rng) : 0.0;
         dense::DenseFrame frame;
-        frame.camera = fit::cameraFor(640, 480, 60.0, 0.0);
+        frame.camera = core::cameraFor(640, 480, 60.0, 0.0);
         frame.observed = dense::projectPoints(m, identity, frame.camera, truth);
         for (auto& v : frame.observed.reshaped()) v += noise(rng);
         dense::fitFrame(m, settings, identity, frame, false);
@@ -134,7 +135,7 @@ TEST(DenseFit, RecoversPoseAndObservableExpressionsOfSyntheticFaces) {
 TEST(DenseCorrespondence, CanonicalMeshLiesOnTheModelAndFitsNoExpression) {
     FACETRACK_REQUIRE_SHARED();
     const auto model = FaceModel::load(test::shippedFaceModel());
-    const auto& data = model->data();
+    const auto& data = model::dataOf(*model);
     const auto canonical = dense::readCanonicalMesh(test::sharedDir() + "/models/mediapipe-canonical/canonical_face_model.obj");
     const auto corr = dense::buildCorrespondence(data, canonical.vertices);
     EXPECT_GE(corr.usableCount(), 440);
@@ -171,7 +172,7 @@ TEST(DenseCorrespondence, CanonicalMeshLiesOnTheModelAndFitsNoExpression) {
 TEST(DenseObservability, MediaPipePointsObserveBrowsSquintAndLipShapesThatLandmarksCannot) {
     FACETRACK_REQUIRE_SHARED();
     const auto model = FaceModel::load(test::shippedFaceModel());
-    const auto& data = model->data();
+    const auto& data = model::dataOf(*model);
     const auto canonical = dense::readCanonicalMesh(test::sharedDir() + "/models/mediapipe-canonical/canonical_face_model.obj");
     const auto corr = dense::buildCorrespondence(data, canonical.vertices);
     std::vector<fit::SurfacePoint> points;
@@ -180,7 +181,7 @@ TEST(DenseObservability, MediaPipePointsObserveBrowsSquintAndLipShapesThatLandma
     auto has = [&](const std::vector<int>& list, const std::string& name) {
         return std::any_of(list.begin(), list.end(), [&](int e) { return data.expressions[static_cast<std::size_t>(e)].name == name; });
     };
-    const auto& landmarks = model->fitBasis()->expressions;
+    const auto& landmarks = fit::basisOf(model)->expressions;
     for (const char* name : {"browDown_L", "browInnerUp_R", "eyeSquint_L", "mouthStretch_R", "mouthDimple_L"}) {
         EXPECT_TRUE(has(dense, name)) << name;
         EXPECT_FALSE(has(landmarks, name)) << name;

@@ -3,7 +3,8 @@
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
 #include "fit/fit_basis.hpp"
-#include "fit/landmark_convention.hpp"
+#include "model/internals.hpp"
+#include "model/landmark_convention.hpp"
 #include "model/face_model_data.hpp"
 #include "test_support.hpp"
 
@@ -83,7 +84,7 @@ TEST(FaceModelFile, InconsistentDataIsNotWritten) {
 
 TEST(ShippedFaceModel, HasWhatTheTrackerNeeds) {
     const auto m = FaceModel::load(test::shippedFaceModel());
-    const auto& d = m->data();
+    const auto& d = model::dataOf(*m);
     EXPECT_EQ(m->vertexCount(), 26719);
     EXPECT_EQ(m->triangleCount(), 2 * 25836 + 548);  // quads split, triangles kept
     EXPECT_GE(m->identityExplainedVariance(), 0.95f);
@@ -205,7 +206,7 @@ TEST(ShippedFaceModel, FrontalLandmarksMatchThe300WMeanShape) {
     const auto m = FaceModel::load(test::shippedFaceModel());
     core::Shape2 projected(2, 68);
     for (int i = 0; i < 68; ++i) {
-        const Eigen::Vector3f v = m->data().neutral.col(m->data().landmark_vertices[i]);
+        const Eigen::Vector3f v = model::dataOf(*m).neutral.col(model::dataOf(*m).landmark_vertices[i]);
         projected.col(i) = Eigen::Vector2f(v.x(), -v.y());  // orthographic, image y down
     }
     const core::Shape2 aligned = core::alignSimilarity(projected, mean).apply(projected);
@@ -241,7 +242,7 @@ namespace {
 TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     const std::string shipped = test::sourceDir() + "/models/landmark_convention.ftm";
     if (!std::filesystem::exists(shipped)) GTEST_SKIP() << "models/landmark_convention.ftm is missing (build/tools/train_convention makes it)";
-    const fit::LandmarkConvention c = fit::readLandmarkConvention(shipped);
+    const model::LandmarkConvention c = model::readLandmarkConvention(shipped);
     // Jaw landmarks keep their vertices; the others move by millimetres, not centimetres.
     EXPECT_EQ(c.offsets_frontal_cm.leftCols(model::kContourLandmarkCount).cwiseAbs().maxCoeff(), 0.0);
     EXPECT_GT(c.offsets_frontal_cm.cwiseAbs().maxCoeff(), 0.05);
@@ -254,8 +255,8 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     const auto with = FaceModel::load(test::shippedFaceModel(), shipped);
     EXPECT_EQ(with->conventionPath(), shipped);
     EXPECT_TRUE(bare->conventionPath().empty());
-    const fit::FitBasis& a = *bare->fitBasis();
-    const fit::FitBasis& b = *with->fitBasis();
+    const fit::FitBasis& a = *fit::basisOf(bare);
+    const fit::FitBasis& b = *fit::basisOf(with);
     ASSERT_EQ(a.slotCount(), b.slotCount());
     int moved = 0;
     for (int s = 0; s < a.slotCount(); ++s) moved += (a.neutral.col(s) - b.neutral.col(s)).norm() > 0.0 ? 1 : 0;
@@ -265,7 +266,7 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     EXPECT_EQ(bare->vertices({}, {})[100].x, with->vertices({}, {})[100].x);
 
     // The expression prior: a factor per listed shape, 1 for the others.
-    const auto names = b.expressionNames(with->data());
+    const auto names = b.expressionNames(model::dataOf(*with));
     for (std::size_t k = 0; k < names.size(); ++k) {
         const auto it = c.expression_prior.find(names[k]);
         EXPECT_EQ(b.expression_prior[static_cast<Eigen::Index>(k)], it == c.expression_prior.end() ? 1.0 : it->second) << names[k];
@@ -273,11 +274,11 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     }
 
     const std::string copy = test::tempPath("convention.ftm");
-    fit::LandmarkConvention withPrior = c;
+    model::LandmarkConvention withPrior = c;
     withPrior.expression_prior["jawOpen"] = 0.25;
-    fit::writeLandmarkConvention(copy, withPrior);
-    EXPECT_EQ(fit::readLandmarkConvention(copy).offsets_frontal_cm, c.offsets_frontal_cm);
-    EXPECT_EQ(fit::readLandmarkConvention(copy).expression_prior, withPrior.expression_prior);
+    model::writeLandmarkConvention(copy, withPrior);
+    EXPECT_EQ(model::readLandmarkConvention(copy).offsets_frontal_cm, c.offsets_frontal_cm);
+    EXPECT_EQ(model::readLandmarkConvention(copy).expression_prior, withPrior.expression_prior);
     {
         std::fstream f(copy, std::ios::in | std::ios::out | std::ios::binary);
         f.seekp(60);
@@ -285,12 +286,12 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     }
     EXPECT_THROW(FaceModel::load(test::shippedFaceModel(), copy), Error);
     EXPECT_THROW(FaceModel::load(test::shippedFaceModel(), test::tempPath("no_convention.ftm")), Error);
-    fit::LandmarkConvention wild = c;
+    model::LandmarkConvention wild = c;
     wild.offsets_frontal_cm(0, 30) = 5.0;
-    EXPECT_THROW(fit::writeLandmarkConvention(copy, wild), Error);
-    fit::LandmarkConvention negative = c;
+    EXPECT_THROW(model::writeLandmarkConvention(copy, wild), Error);
+    model::LandmarkConvention negative = c;
     negative.expression_prior["jawOpen"] = -1.0;
-    EXPECT_THROW(fit::writeLandmarkConvention(copy, negative), Error);
+    EXPECT_THROW(model::writeLandmarkConvention(copy, negative), Error);
     std::filesystem::remove(copy);
 }
 
@@ -305,7 +306,7 @@ TEST(LandmarkConvention, LandmarkPointsAreTheFitsLandmarksOnTheMesh) {
     const std::vector<int> vertices = with->landmarkVertices();
     const std::vector<Vec3> plain = bare->landmarkPoints(mesh), moved = with->landmarkPoints(mesh);
     ASSERT_EQ(moved.size(), 68u);
-    const fit::FitBasis& basis = *with->fitBasis();
+    const fit::FitBasis& basis = *fit::basisOf(with);
     double largest = 0.0;
     for (std::size_t i = 0; i < 68; ++i) {
         const Vec3& v = mesh[static_cast<std::size_t>(vertices[i])];

@@ -1,8 +1,9 @@
 // The CNN cascade's input (src/cnn/face_warp): the face texture in canonical space.
 
-#include "cnn/cnn_model_data.hpp"
-#include "cnn/face_warp.hpp"
-#include "cnn/update_net.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "expression/face_warp.hpp"
+#include "expression/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
 #include "profile/face_profiling.hpp"
@@ -16,8 +17,8 @@ namespace {
 
 struct WarpScene {
     std::shared_ptr<const FaceModel> model = FaceModel::load(test::shippedFaceModel());
-    cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), model->fitBasis()->expressions);
-    fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*model), fit::basisOf(model)->expressions);
+    core::Camera camera = core::cameraFor(640, 480, 60.0, 0.0);
 };
 
 const WarpScene& scene() {
@@ -66,7 +67,7 @@ TEST(FaceWarp, PatchDoesNotChangeWhenTheCameraRollsAboutItsAxis) {
     const cv::Mat frame = smoothTexture(640, 480, 2);
     const fit::FaceParams params = faceAt({8.0, -15.0, 5.0}, {1.0, -1.0, 50.0}, s.layout.anchors.expressionCount());
     cv::Mat patch;
-    cnn::warpFace(s.layout, frame, cnn::projectAnchors(s.layout, {}, s.camera, params), patch);
+    expression::warpFace(s.layout, frame, expression::projectAnchors(s.layout, {}, s.camera, params), patch);
 
     const double roll = 20.0;
     const Eigen::Matrix3d rz = Eigen::AngleAxisd(roll * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -79,7 +80,7 @@ TEST(FaceWarp, PatchDoesNotChangeWhenTheCameraRollsAboutItsAxis) {
     cv::Mat rotatedFrame;
     cv::warpAffine(frame, rotatedFrame, turn, frame.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     cv::Mat rolledPatch;
-    cnn::warpFace(s.layout, rotatedFrame, cnn::projectAnchors(s.layout, {}, s.camera, rolled), rolledPatch);
+    expression::warpFace(s.layout, rotatedFrame, expression::projectAnchors(s.layout, {}, s.camera, rolled), rolledPatch);
 
     cv::Mat difference;
     cv::absdiff(patch, rolledPatch, difference);
@@ -94,13 +95,13 @@ TEST(FaceWarp, RejectsAWrongFrameOrAnchors) {
     const auto& s = scene();
     cv::Mat patch;
     const Eigen::Matrix2Xd anchors = Eigen::Matrix2Xd::Constant(2, s.layout.anchorCount(), 100.0);
-    EXPECT_THROW(cnn::warpFace(s.layout, cv::Mat(10, 10, CV_8UC3), anchors, patch), Error);
-    EXPECT_THROW(cnn::warpFace(s.layout, cv::Mat(10, 10, CV_8UC1), anchors.leftCols(3), patch), Error);
+    EXPECT_THROW(expression::warpFace(s.layout, cv::Mat(10, 10, CV_8UC3), anchors, patch), Error);
+    EXPECT_THROW(expression::warpFace(s.layout, cv::Mat(10, 10, CV_8UC1), anchors.leftCols(3), patch), Error);
     Eigen::Matrix2Xd bad = anchors;
     bad(0, 0) = std::nan("");
-    EXPECT_THROW(cnn::warpFace(s.layout, cv::Mat(10, 10, CV_8UC1, cv::Scalar(7)), bad, patch), Error);
+    EXPECT_THROW(expression::warpFace(s.layout, cv::Mat(10, 10, CV_8UC1, cv::Scalar(7)), bad, patch), Error);
     // Anchors far outside a tiny frame: edge pixels repeated, no crash.
-    cnn::warpFace(s.layout, cv::Mat(1, 1, CV_8UC1, cv::Scalar(7)), anchors, patch);
+    expression::warpFace(s.layout, cv::Mat(1, 1, CV_8UC1, cv::Scalar(7)), anchors, patch);
     EXPECT_EQ(cv::countNonZero(patch != 7), 0);
 }
 
@@ -111,22 +112,22 @@ TEST(CascadeUpdate, TakesTheStartToTheFaceAndTurnsAboutTheFaceCentre) {
     start.expression.setConstant(0.2);
     face.expression.setConstant(0.5);
     fit::FaceParams moved = start;
-    cnn::applyUpdate(s.layout, cnn::updateBetween(s.layout, start, face), moved);
+    expression::applyUpdate(s.layout, expression::updateBetween(s.layout, start, face), moved);
     EXPECT_LT((moved.pose - face.pose).norm(), 1e-9);
     EXPECT_LT((moved.expression - face.expression).norm(), 1e-12);
     // A pure turn leaves the face centre where it was: the update's rotation is about it.
     Eigen::VectorXd turn = Eigen::VectorXd::Zero(6 + e);
     turn.head<3>() = Eigen::Vector3d(0.1, -0.2, 0.05);
     fit::FaceParams turned = start;
-    cnn::applyUpdate(s.layout, turn, turned);
+    expression::applyUpdate(s.layout, turn, turned);
     const auto centre = [&](const fit::FaceParams& p) { return Eigen::Vector3d(fit::rotationOf(p.omega()) * s.layout.centre + p.translation()); };
     EXPECT_LT((centre(turned) - centre(start)).norm(), 1e-9);
     EXPECT_GT((turned.translation() - start.translation()).norm(), 0.5);  // the model origin, behind the face, moved
-    EXPECT_NEAR(cnn::updateBetween(s.layout, start, turned).head<3>().norm(), turn.head<3>().norm(), 1e-9);
+    EXPECT_NEAR(expression::updateBetween(s.layout, start, turned).head<3>().norm(), turn.head<3>().norm(), 1e-9);
     // Expressions stay in [0, 1].
     Eigen::VectorXd push = Eigen::VectorXd::Zero(6 + e);
     push.tail(e).setConstant(2.0);
-    cnn::applyUpdate(s.layout, push, turned);
+    expression::applyUpdate(s.layout, push, turned);
     EXPECT_EQ(turned.expression.maxCoeff(), 1.0);
 }
 
@@ -157,7 +158,7 @@ TEST(FaceProfiling, TurnedFaceCarriesThePhotographsTextureAlong) {
     int points = 0;
     // Nose, the near eye, mouth (the far eye is behind the nose at 45 deg).
     for (const int landmark : {30, 33, 36, 39, 48, 51, 57, 62, 66}) {
-        const auto& v = vertices[s.model->data().landmark_vertices[static_cast<std::size_t>(landmark)]];
+        const auto& v = vertices[model::dataOf(*s.model).landmark_vertices[static_cast<std::size_t>(landmark)]];
         const Eigen::Vector2d from = pixelOf(photographed, v), to = pixelOf(turned, v);
         error += std::abs(double(face.image.at<std::uint8_t>(cv::Point(int(std::lround(to.x())), int(std::lround(to.y()))))) -
                           double(photo.at<std::uint8_t>(cv::Point(int(std::lround(from.x())), int(std::lround(from.y()))))));
@@ -175,7 +176,7 @@ TEST(FaceProfiling, ExpressionCopiesMoveOneGroupOfShapesAndCarryTheTextureWithTh
     const cv::Mat photo = smoothTexture(640, 480, 9);
     const std::vector<std::string> names = {"browDown_L", "browDown_R", "browInnerUp_L", "browInnerUp_R",
                                             "browOuterUp_L", "browOuterUp_R", "mouthPucker", "jawOpen"};
-    const std::vector<int> ids = cnn::expressionIndices(s.model->expressionNames(), names);
+    const std::vector<int> ids = nn::expressionIndices(s.model->expressionNames(), names);
     fit::FaceParams label = faceAt({0.0, 10.0, 0.0}, {0.0, 0.0, 50.0}, static_cast<Eigen::Index>(ids.size()));
     label.expression << 0.1, 0.1, 0.0, 0.0, 0.2, 0.2, 0.0, 0.3;
     const std::vector<float> identity(static_cast<std::size_t>(s.model->identityCount()), 0.f);
@@ -208,7 +209,7 @@ TEST(FaceProfiling, ExpressionCopiesMoveOneGroupOfShapesAndCarryTheTextureWithTh
         const auto movedMesh = s.model->vertices(identity, profile::nativeWeights(*s.model, ids, copy.label.expression));
         double error = 0.0;
         for (const int landmark : {19, 24, 21, 39, 48, 51, 54, 57}) {
-            const auto v = static_cast<std::size_t>(s.model->data().landmark_vertices[static_cast<std::size_t>(landmark)]);
+            const auto v = static_cast<std::size_t>(model::dataOf(*s.model).landmark_vertices[static_cast<std::size_t>(landmark)]);
             const Eigen::Vector2d from = pixelOf(photographedMesh[v]), to = pixelOf(movedMesh[v]);
             const auto grey = [](const cv::Mat& image, const Eigen::Vector2d& p) {
                 return double(image.at<std::uint8_t>(cv::Point(int(std::lround(p.x())), int(std::lround(p.y())))));

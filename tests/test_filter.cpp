@@ -1,4 +1,4 @@
-#include "filter/one_euro.hpp"
+#include "core/one_euro.hpp"
 #include "filter/filter_stage.hpp"
 
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@ namespace facetrack {
 namespace {
 
 TEST(OneEuroFilter, PassesAConstantAndTheFirstSample) {
-    filter::OneEuroFilter f;
+    core::OneEuroFilter f;
     const Eigen::VectorXd x = Eigen::VectorXd::Constant(3, 2.5);
     EXPECT_EQ(f(x, 1.0 / 30), x);
     for (int i = 0; i < 10; ++i) EXPECT_LT((f(x, 1.0 / 30) - x).norm(), 1e-12);
@@ -20,7 +20,7 @@ TEST(OneEuroFilter, PassesAConstantAndTheFirstSample) {
 TEST(OneEuroFilter, SmoothsNoiseAtRestAndFollowsFastMotionWithLittleLag) {
     std::mt19937 rng(4);
     std::normal_distribution<double> noise(0.0, 1.0);
-    filter::OneEuroFilter still({1.0, 1.0, 1.0});
+    core::OneEuroFilter still({1.0, 1.0, 1.0});
     double rawSq = 0, outSq = 0;
     for (int i = 0; i < 300; ++i) {
         const double n = noise(rng);
@@ -34,7 +34,7 @@ TEST(OneEuroFilter, SmoothsNoiseAtRestAndFollowsFastMotionWithLittleLag) {
 
     // A ramp of 100 units per second: a high beta keeps the lag small.
     auto lagAfter = [](double beta) {
-        filter::OneEuroFilter f({1.0, beta, 1.0});
+        core::OneEuroFilter f({1.0, beta, 1.0});
         double y = 0;
         for (int i = 0; i < 60; ++i) y = f(Eigen::VectorXd::Constant(1, 100.0 * i / 30), 1.0 / 30, 10.0)[0];
         return 100.0 * 59 / 30 - y;
@@ -43,7 +43,7 @@ TEST(OneEuroFilter, SmoothsNoiseAtRestAndFollowsFastMotionWithLittleLag) {
 }
 
 TEST(OneEuroFilter, RestartsOnResetOrBadTime) {
-    filter::OneEuroFilter f;
+    core::OneEuroFilter f;
     f(Eigen::VectorXd::Zero(2), 0.1);
     const Eigen::VectorXd x = Eigen::VectorXd::Constant(2, 7.0);
     f.reset();
@@ -53,7 +53,7 @@ TEST(OneEuroFilter, RestartsOnResetOrBadTime) {
 }
 
 TEST(MotionSpeed, IsTheSmoothedSpeedOfAPoint) {
-    filter::MotionSpeed speed(1.0);
+    core::MotionSpeed speed(1.0);
     EXPECT_EQ(speed({5.0, 5.0}, 0.1), 0.0);  // the first position has no speed
     double v = 0.0;
     for (int i = 1; i <= 100; ++i) v = speed({5.0 + 3.0 * i / 30, 5.0 - 4.0 * i / 30}, 1.0 / 30, 2.0);
@@ -82,10 +82,10 @@ struct FilterRun {
     double lag = 0.0, jitter = 0.0;
 };
 FilterRun filterPoints(bool wholeStage, double speedPxPerS) {
-    const FilterConfig config;
-    const auto stage = filter::makeFilterStage(nullptr, config);
+    const core::OneEuroSettings config{1.0, 2.0, 1.0};  // TrackerConfig::filter's defaults
+    const auto stage = filter::makeFilterStage(nullptr, config, true);
     const auto state = stage->newFaceState();
-    filter::OneEuroFilter alone({config.min_cutoff_hz, config.beta, config.derivative_cutoff_hz});
+    core::OneEuroFilter alone({config.min_cutoff_hz, config.beta, config.derivative_cutoff_hz});
     pipeline::FaceTrack face;
     const cv::Mat gray(8, 8, CV_8UC1, cv::Scalar(0));
     const double dt = 1.0 / 30;
@@ -105,7 +105,7 @@ FilterRun filterPoints(bool wholeStage, double speedPxPerS) {
             face.result.landmarks.emplace();
             for (std::size_t i = 0; i < 68; ++i) (*face.result.landmarks)[i] = {static_cast<float>(sample[2 * i]), static_cast<float>(sample[2 * i + 1])};
             face.fresh = t == 0;
-            EXPECT_TRUE(stage->run(frame, face, state.get()));
+            EXPECT_EQ(stage->run(frame, face, state.get()), pipeline::Outcome::Ok);
             for (std::size_t i = 0; i < 68; ++i) sample.segment<2>(2 * i) << (*face.result.landmarks)[i].x, (*face.result.landmarks)[i].y;
         } else {
             sample = alone(sample, dt, 60.0);

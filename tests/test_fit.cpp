@@ -2,6 +2,7 @@
 #include "facetrack/face_model.hpp"
 #include "fit/costs.hpp"
 #include "fit/face_fitter.hpp"
+#include "model/internals.hpp"
 #include "test_support.hpp"
 
 #include <algorithm>
@@ -17,8 +18,8 @@ using fit::Landmarks2d;
 
 struct Scene {
     std::shared_ptr<const FaceModel> model = FaceModel::load(test::shippedFaceModel());
-    std::shared_ptr<const fit::FitBasis> basis = model->fitBasis();  // built once with the model
-    fit::Camera camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    std::shared_ptr<const fit::FitBasis> basis = fit::basisOf(model);  // built once with the model
+    core::Camera camera = core::cameraFor(640, 480, 60.0, 0.0);
 };
 
 struct SyntheticFrame {
@@ -66,7 +67,7 @@ constexpr double kMaxYaw = 60.0;
 const std::vector<std::string> kObservable = {"jawOpen", "mouthClose", "mouthLeft", "mouthRight"};
 
 std::vector<int> indicesOf(const Scene& s, const std::vector<std::string>& wanted) {
-    const auto names = s.basis->expressionNames(s.model->data());
+    const auto names = s.basis->expressionNames(model::dataOf(*s.model));
     std::vector<int> out;
     for (const auto& w : wanted) {
         const auto it = std::find(names.begin(), names.end(), w);
@@ -84,7 +85,7 @@ Eigen::VectorXd randomIdentity(const Scene& s, std::mt19937& rng) {
 
 TEST(Fit, ObservableExpressionsExcludeEyeLookAndIncludeJaw) {
     const Scene s;
-    const auto names = s.basis->expressionNames(s.model->data());
+    const auto names = s.basis->expressionNames(model::dataOf(*s.model));
     EXPECT_EQ(indicesOf(s, kObservable).size(), kObservable.size());
     for (const auto& n : {"eyeBlink_L", "eyeBlink_R", "mouthSmile_L", "mouthSmile_R"}) {
         EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n << " should be fitted";
@@ -239,7 +240,7 @@ struct Summary {
 };
 
 Summary summarise(const Scene& s, const FitErrors& e, const char* label) {
-    const auto names = s.basis->expressionNames(s.model->data());
+    const auto names = s.basis->expressionNames(model::dataOf(*s.model));
     const Eigen::VectorXd rms = (e.expression_sq / e.frames).cwiseSqrt();
     double observableSq = 0;
     const auto observable = indicesOf(s, kObservable);
@@ -279,9 +280,9 @@ TEST(Fit, LearnedPriorKeepsARelaxedFaceNeutralAndFollowsStrongExpressions) {
     if (!std::filesystem::exists(convention)) GTEST_SKIP() << "models/landmark_convention.ftm is missing";
     Scene s;
     s.model = FaceModel::load(test::shippedFaceModel(), convention);
-    s.basis = s.model->fitBasis();
+    s.basis = fit::basisOf(s.model);
     ASSERT_GT(s.basis->expression_prior.maxCoeff(), 1.0) << "the shipped convention carries a learned prior";
-    const auto names = s.basis->expressionNames(s.model->data());
+    const auto names = s.basis->expressionNames(model::dataOf(*s.model));
     auto index = [&](const std::string& name) { return static_cast<int>(std::find(names.begin(), names.end(), name) - names.begin()); };
     std::mt19937 rng(5);
     std::normal_distribution<double> noise(0.0, 1.0);

@@ -14,6 +14,7 @@
 #include "core/binary_io.hpp"
 #include "core/image.hpp"
 #include "facetrack/facetrack.hpp"
+#include "model/internals.hpp"
 #include "test_support.hpp"
 
 #include <Eigen/Geometry>
@@ -431,7 +432,7 @@ struct IdealEye {
     EyeObservation seen;
 };
 
-void drawIdeal(IdealEye& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles) {
+void drawIdeal(IdealEye& eye, const Eigen::Matrix3f& R, const core::Camera& camera, const Eigen::Vector2f& angles) {
     ProjectedIris p;
     ASSERT_TRUE(projectIris(eye.seen, R, camera, angles, p));
     Eigen::Matrix2f axes;
@@ -447,7 +448,7 @@ void drawIdeal(IdealEye& eye, const Eigen::Matrix3f& R, const fit::Camera& camer
 /// Both eyes of a face at (R, t), eyes 31 mm either side of the middle, their
 /// patches cut from a flat grey frame between corners 14 mm either side of each
 /// eye, in front of the eyeball; the maps are left for the test to draw.
-void placeEyes(std::array<IdealEye, 2>& eyes, const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const fit::Camera& camera) {
+void placeEyes(std::array<IdealEye, 2>& eyes, const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const core::Camera& camera) {
     const cv::Mat gray(480, 640, CV_8U, cv::Scalar(128));
     for (int e = 0; e < 2; ++e) {
         IdealEye& eye = eyes[static_cast<std::size_t>(e)];
@@ -469,7 +470,7 @@ TEST(GazeFit, RecoversKnownGazeFromIdealMapsAndHoldsWhenBothEyesClose) {
     // A face 500 mm away, turned 15 degrees.
     const Eigen::Matrix3f R =
         (Eigen::Quaternionf(0, 1, 0, 0) * Eigen::AngleAxisf(15 * kDeg, Eigen::Vector3f::UnitY())).toRotationMatrix();
-    fit::Camera camera;
+    core::Camera camera;
     camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
     std::array<IdealEye, 2> eyes;
     placeEyes(eyes, R, Eigen::Vector3f(0, 0, 500), camera);
@@ -506,7 +507,7 @@ TEST(GazeFit, TheAppearanceTermPutsTheIrisWhereThePatchShowsIt) {
     // mostly centred irises does for an eye looking aside); the patch shows a
     // dark iris at 18 degrees to the side on a shaded sclera.
     const Eigen::Matrix3f R = Eigen::Quaternionf(0, 1, 0, 0).toRotationMatrix();
-    fit::Camera camera;
+    core::Camera camera;
     camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
     std::array<IdealEye, 2> eyes;
     placeEyes(eyes, R, Eigen::Vector3f(0, 0, 450), camera);
@@ -630,7 +631,7 @@ TEST_F(GazeOnRenders, RecoversKnownGaze) {
 /// landmarks' are. Measured over 400 renders: 2.5 -> about 1 % of the
 /// inter-ocular distance (eval-gaze).
 TEST_F(GazeOnRenders, TheCornerCascadeFindsTheEyeCorners) {
-    const EyeModelData& model = models_.eyes->data();
+    const EyeModelData& model = model::dataOf(*models_.eyes);
     ASSERT_FALSE(model.corner_stages.empty()) << "the shipped eye model has no corner cascade";
     std::vector<double> landmarkError, refinedError;
     for (const float headYaw : {-20.f, 0.f, 20.f}) {

@@ -7,6 +7,7 @@
 #include "landmarks/lbf.hpp"
 #include "landmarks/lbf_trainer.hpp"
 #include "core/image.hpp"
+#include "model/internals.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -239,12 +240,12 @@ TEST(ShippedLandmarkModel, StaysAccurateOnHeldOutFaces) {
         ASSERT_FALSE(found.empty()) << stem;
         cv::Mat gray;
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-        const Shape68 start = shapeFromBox(model->data(), found[0].box, "yunet");
-        const Shape68 fitted = alignLandmarks(model->data(), gray, start);
+        const Shape68 start = shapeFromBox(model::dataOf(*model), found[0].box, "yunet");
+        const Shape68 fitted = alignLandmarks(model::dataOf(*model), gray, start);
         // One start through alignFromStarts is the plain cascade.
-        EXPECT_EQ(alignFromStarts(model->data(), gray, start, 1), fitted);
+        EXPECT_EQ(alignFromStarts(model::dataOf(*model), gray, start, 1), fitted);
         sum += core::nme68(core::Shape2(fitted), truth);
-        sumStarts += core::nme68(core::Shape2(alignFromStarts(model->data(), gray, start, kTrackerStarts)), truth);
+        sumStarts += core::nme68(core::Shape2(alignFromStarts(model::dataOf(*model), gray, start, kTrackerStarts)), truth);
         ++count;
     }
     ASSERT_GE(count, 30);
@@ -266,7 +267,7 @@ TEST(ShippedLandmarkModel, AveragedStartsJitterLessUnderPixelNoise) {
     for (const auto& [number, stem] : test::lfpwTestFaces(8)) {
         cv::Mat gray = cv::imread(stem + ".jpg", cv::IMREAD_GRAYSCALE);
         const core::Shape2 truth = core::readPts(stem + ".pts");
-        const Shape68 start = alignLandmarks(model->data(), gray, Shape68(truth));
+        const Shape68 start = alignLandmarks(model::dataOf(*model), gray, Shape68(truth));
         const float eyes = (truth.col(36) - truth.col(45)).norm();
         for (const int n : {1, kTrackerStarts}) {
             std::vector<Shape68> answers;
@@ -277,7 +278,7 @@ TEST(ShippedLandmarkModel, AveragedStartsJitterLessUnderPixelNoise) {
                 cv::Mat grayF;
                 gray.convertTo(grayF, CV_32F);
                 cv::Mat(grayF + noise).convertTo(noisy, CV_8U);
-                answers.push_back(alignFromStarts(model->data(), noisy, start, n));
+                answers.push_back(alignFromStarts(model::dataOf(*model), noisy, start, n));
             }
             Shape68 mean = Shape68::Zero();
             for (const auto& a : answers) mean += a / static_cast<float>(answers.size());

@@ -1,6 +1,7 @@
 // The Tracker's stage machinery with fake stages and a fake detector, in the
 // style of MediaPipe's CalculatorRunner: no models, no images with faces.
 
+#include "neutral/neutral_stage.hpp"
 #include "pipeline/stage.hpp"
 #include "track/tracker_core.hpp"
 
@@ -56,7 +57,8 @@ struct Counter final : pipeline::StageState {
 };
 
 /// Appends its name to a log when it runs, moves the face one pixel right,
-/// writes fit_residual = its index; fails on the frames listed in `failOn`.
+/// writes fit_residual = its index; loses the face on the frames listed in
+/// `fail_on`, doubts or unsettles it on `doubt_on`, `unsettle_on`.
 class FakeStage final : public pipeline::Stage {
 public:
     FakeStage(std::string name, bool available, std::vector<std::string>* log, float index)
@@ -68,10 +70,19 @@ public:
     int frame = -1;            // set by the test before each process()
     Counter seen;              // the face state's counters as of the last run
     double dt = 0.0;           // the last run's FrameInput::dt
+    pipeline::Contract declared;  // what contract() says
+    pipeline::Upstream told;      // what connect() was told
+    bool connected = false;
 
     StageInfo info() const override { return {name_, available_, available_ ? "fake" : "not available: fake"}; }
+    pipeline::Contract contract() const override { return declared; }
+    void connect(const pipeline::Upstream& upstream) override {
+        told = upstream;
+        connected = true;
+    }
     std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<Counter>(); }
-    bool run(const pipeline::FrameInput& input, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+    pipeline::Outcome run(const pipeline::FrameInput& input, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        EXPECT_TRUE(connected);  // the Tracker connects every stage it runs
         EXPECT_GT(input.dt, 0.0);
         dt = input.dt;
         EXPECT_EQ(input.gray.cols, input.colour.width);  // grey is ready for every stage
@@ -86,11 +97,12 @@ public:
         moved.x0 += step;
         moved.x1 += step;
         face.locate(moved);
-        if (doubt) face.doubtful = true;
-        if (!face.fresh && std::find(unsettle_on.begin(), unsettle_on.end(), frame) != unsettle_on.end()) face.unsettled = true;
-        return std::find(fail_on.begin(), fail_on.end(), frame) == fail_on.end();
+        if (std::find(fail_on.begin(), fail_on.end(), frame) != fail_on.end()) return pipeline::Outcome::Lost;
+        if (doubt) return pipeline::Outcome::Doubtful;
+        if (!face.fresh && std::find(unsettle_on.begin(), unsettle_on.end(), frame) != unsettle_on.end()) return pipeline::Outcome::Unsettled;
+        return pipeline::Outcome::Ok;
     }
-    void resetCalibration(pipeline::StageState* state) const override { ++static_cast<Counter&>(*state).resets; }
+    void resetIdentity(pipeline::StageState* state) const override { ++static_cast<Counter&>(*state).resets; }
 
 private:
     std::string name_;
@@ -101,13 +113,15 @@ private:
 
 class StageRunner : public ::testing::Test {
 protected:
-    /// A TrackerCore with stages named `names` (a '-' prefix: not available).
-    void build(const std::vector<std::string>& names, int verifyInterval = 0) {
+    /// A TrackerCore with stages named `names` (a '-' prefix: not available),
+    /// each declaring `contracts[i]` when given.
+    void build(const std::vector<std::string>& names, int verifyInterval = 0, const std::vector<pipeline::Contract>& contracts = {}) {
         pipeline::StageList stages;
         for (std::size_t i = 0; i < names.size(); ++i) {
             const bool available = names[i][0] != '-';
             auto stage = std::make_unique<FakeStage>(available ? names[i] : names[i].substr(1), available, &log,
                                                      static_cast<float>(i));
+            if (i < contracts.size()) stage->declared = contracts[i];
             fakes.push_back(stage.get());
             stages.push_back(std::move(stage));
         }
@@ -215,11 +229,11 @@ TEST_F(StageRunner, WithoutAStageThatLocatesTheFaceItIsDetectedEveryFrame) {
     EXPECT_EQ(detections, 3);
 }
 
-TEST_F(StageRunner, EveryFaceHasItsOwnStateAndResetCalibrationReachesIt) {
+TEST_F(StageRunner, EveryFaceHasItsOwnStateAndResetIdentityReachesIt) {
     build({"a"});
     step();
     step();
-    core->resetCalibration();
+    core->resetIdentity();
     step();
     EXPECT_EQ(fakes[0]->seen.runs, 3);
     EXPECT_EQ(fakes[0]->seen.resets, 1);
@@ -363,11 +377,84 @@ TEST_F(StageRunner, AFaceInDoubtMustAgreeWithTheDetectorMoreCloselyThanAPeriodic
     EXPECT_EQ(r.faces[0].box.x0, 21.f);
 }
 
+// The contracts: a stage whose reads no earlier available stage writes is not
+// available, and says which; the others are told what the stages before them
+// write and estimate.
+TEST_F(StageRunner, AStageWhoseReadsNoEarlierStageWritesIsNotAvailable) {
+    using pipeline::Field;
+    build({"landmarks", "-fit", "gaze", "pose", "late"}, 0,
+          {{{}, Field::Landmarks, {3, 4}},
+           {Field::Landmarks, Field::Pose},
+           {Field::Landmarks | Field::Pose, Field::Gaze},  // its pose's writer is not available
+           {Field::Landmarks, Field::Pose | Field::Expression, {7}, true},
+           {Field::Pose | Field::Gaze, {}}});  // gaze: its writer could not run
+    const auto listed = core->stages();
+    EXPECT_TRUE(listed[2].available);
+    EXPECT_FALSE(listed[3].available);
+    EXPECT_FALSE(listed[4].available);
+    EXPECT_EQ(listed[4].detail, "not available: needs pose, which no stage before it writes");
+    EXPECT_TRUE(listed[5].available);
+    EXPECT_FALSE(listed[6].available);
+    EXPECT_EQ(listed[6].detail, "not available: needs gaze, which no stage before it writes");
+    step();
+    EXPECT_EQ(log, (std::vector<std::string>{"landmarks", "pose"}));
+    EXPECT_FALSE(fakes[2]->connected);
+    EXPECT_TRUE(fakes[3]->told.written == Field::Landmarks);
+    EXPECT_EQ(fakes[3]->told.expressions, (std::vector<int>{3, 4}));
+    EXPECT_TRUE(fakes[3]->told.smoothed_expressions.empty());
+    EXPECT_EQ(core->estimatedExpressions(), (std::vector<int>{3, 4, 7}));
+    // What "pose" provides, as a later stage would be told it.
+    pipeline::Upstream after = fakes[3]->told;
+    pipeline::provide(fakes[3]->contract(), after);
+    EXPECT_TRUE(after.written == (Field::Landmarks | Field::Pose | Field::Expression));
+    EXPECT_EQ(after.smoothed_expressions, (std::vector<int>{7}));
+}
+
 TEST_F(StageRunner, NullStagesAndDetectorsAreRefused) {
     pipeline::StageList withNull;
     withNull.push_back(nullptr);
     EXPECT_THROW(track::TrackerCore(std::make_unique<FakeDetector>(&detections), std::move(withNull), {}), Error);
     EXPECT_THROW(track::TrackerCore(nullptr, {}, {}), Error);
+}
+
+// The neutral stage alone: weights relative to the neutral, w' = (w - w0) / (1 - w0),
+// the neutral taken from what the stage was given (not what it reported), the
+// eyes' look directions left alone.
+TEST(NeutralStage, MeasuresFromTheNeutralItWasGivenAndLeavesTheGazeAlone) {
+    const auto model = FaceModel::load(test::shippedFaceModel());
+    const auto stage = neutral::makeNeutralStage(model);
+    EXPECT_TRUE(stage->contract().reads == pipeline::Field::Expression);
+    const auto state = stage->newFaceState();
+    const auto index = [](const char* name) {
+        return static_cast<std::size_t>(std::find(arkitNames().begin(), arkitNames().end(), std::string_view(name)) - arkitNames().begin());
+    };
+    const std::size_t smile = index("mouthSmileLeft"), look = index("eyeLookInLeft");
+    ASSERT_LT(smile, arkitNames().size());
+    ASSERT_LT(look, arkitNames().size());
+    const cv::Mat gray(8, 8, CV_8UC1, cv::Scalar(0));
+    const pipeline::FrameInput frame{{}, gray, {}, 1.0 / 30};
+    pipeline::FaceTrack face;
+    const auto run = [&](float smileWeight) {
+        face.result.expression.emplace();
+        face.result.expression->native.assign(model->expressionNames().size(), 0.f);
+        face.result.expression->arkit[smile] = smileWeight;
+        face.result.expression->arkit[look] = 0.3f;
+        EXPECT_EQ(stage->run(frame, face, state.get()), pipeline::Outcome::Ok);
+        return face.result.expression->arkit;
+    };
+    EXPECT_FLOAT_EQ(run(0.2f)[smile], 0.2f);  // no neutral yet: as given
+    stage->calibrateNeutral(state.get(), true);
+    EXPECT_FLOAT_EQ(run(0.2f)[smile], 0.f);
+    auto w = run(0.6f);
+    EXPECT_FLOAT_EQ(w[smile], 0.5f);
+    EXPECT_FLOAT_EQ(w[look], 0.3f);
+    EXPECT_FLOAT_EQ(run(0.1f)[smile], 0.f);  // below the neutral: clamped
+    run(0.6f);
+    stage->calibrateNeutral(state.get(), true);  // from the 0.6 given, not the 0.5 reported
+    EXPECT_FLOAT_EQ(run(0.6f)[smile], 0.f);
+    EXPECT_FLOAT_EQ(run(0.8f)[smile], 0.5f);
+    stage->calibrateNeutral(state.get(), false);
+    EXPECT_FLOAT_EQ(run(0.6f)[smile], 0.6f);
 }
 
 TEST(TrackerApi, TakesTheApplicationsOwnDetector) {

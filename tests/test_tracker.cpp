@@ -1,6 +1,7 @@
 #include "core/image.hpp"
 #include "core/pts.hpp"
 #include "core/shape2d.hpp"
+#include "fit/fit_basis.hpp"
 #include "landmarks/lbf.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/tracker.hpp"
@@ -56,7 +57,7 @@ TEST(Tracker, ReportsDetectionAndLeavesStagesWithoutModelsEmpty) {
 TEST(Tracker, StagesSayWhatIsNotAvailable) {
     const Tracker tracker(faceOnly());
     const auto stages = tracker.stages();
-    const std::vector<std::string> order = {"detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter"};
+    const std::vector<std::string> order = {"detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "neutral"};
     ASSERT_EQ(stages.size(), order.size());
     for (std::size_t i = 0; i < order.size(); ++i) EXPECT_EQ(stages[i].name, order[i]);
     EXPECT_TRUE(stages[0].available);
@@ -67,6 +68,9 @@ TEST(Tracker, StagesSayWhatIsNotAvailable) {
         EXPECT_EQ(stages[i].detail.rfind("not available", 0), 0u) << stages[i].detail;
     }
     EXPECT_TRUE(stages[7].available);
+    EXPECT_TRUE(stages[8].available);
+    // The fit is built but needs landmarks: its contract says so.
+    EXPECT_EQ(stages[4].detail, "not available: needs landmarks, which no stage before it writes");
     TrackerConfig config;
     config.filter.enabled = false;
     config.verify_interval = 0;
@@ -75,16 +79,16 @@ TEST(Tracker, StagesSayWhatIsNotAvailable) {
     EXPECT_FALSE(off[7].available);
 }
 
-TEST(Tracker, TrackersShareTheModelsFitBasisInsteadOfBuildingTheirOwn) {
+TEST(Tracker, TrackersShareTheFitBasisOfTheirFaceModelInsteadOfBuildingTheirOwn) {
     const Models models = faceOnly();
-    const auto& basis = models.face->fitBasis();
+    const auto& basis = fit::basisOf(models.face);
     ASSERT_TRUE(basis);
     const long before = basis.use_count();
     TrackerConfig config;
     config.detector.kind = DetectorKind::Cascade;
     {
         const Tracker a(models, config), b(models, config);
-        EXPECT_EQ(basis.use_count(), before + 2);  // each tracker's fit stage holds the model's one basis
+        EXPECT_EQ(basis.use_count(), before + 2);  // each tracker's fit stage holds the one basis of the face model
     }
     EXPECT_EQ(basis.use_count(), before);
 }

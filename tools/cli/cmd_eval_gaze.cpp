@@ -3,6 +3,7 @@
 // held-out clips and 300-W images, and on synthetic renders of known gaze.
 
 #include "commands.hpp"
+#include "model/internals.hpp"
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
@@ -162,7 +163,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
                 cornerErrors.push_back(alongTheEye(l[o], l[i]));
                 gaze::EyePatch patch, scratch;
                 if (!gaze::cutEyePatch(gray, l, e, patch)) continue;
-                const auto refined = gaze::eyeCorners(models.eyes->data(), gray, patch, scratch);
+                const auto refined = gaze::eyeCorners(model::dataOf(*models.eyes), gray, patch, scratch);
                 refinedErrors.push_back(alongTheEye(refined[0], refined[1]));
             }
             for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) apertures.push_back(t->second.eye(e).aperture());

@@ -2,6 +2,7 @@
 #include "commands.hpp"
 #include "json.hpp"
 #include "common/faces300w.hpp"
+#include "model/internals.hpp"
 #include "stats.hpp"
 #include "still_landmarks.hpp"
 
@@ -127,7 +128,7 @@ struct Method {
 Method ourLbf(std::shared_ptr<const LandmarkModel> model, int starts) {
     return {"facetrack LBF, " + std::to_string(starts) + (starts == 1 ? " start" : " starts"),
             [model, starts](const cv::Mat&, const cv::Mat& gray, const Box& box) {
-                return Shape2(landmarks::alignFromStarts(model->data(), gray, landmarks::shapeFromBox(model->data(), box, "yunet"), starts));
+                return Shape2(landmarks::alignFromStarts(model::dataOf(*model), gray, landmarks::shapeFromBox(model::dataOf(*model), box, "yunet"), starts));
             }};
 }
 
@@ -149,8 +150,8 @@ Method trackedStill(std::shared_ptr<const LandmarkModel> model, int starts, int 
                     else tracker->process(tools::viewOf(bgr), t, {}, *result);
                     if (result->faces.empty() || !result->faces[0].landmarks) {
                         ++dropped;
-                        return Shape2(landmarks::alignFromStarts(model->data(), gray,
-                                                                 landmarks::shapeFromBox(model->data(), box, "yunet"), starts));
+                        return Shape2(landmarks::alignFromStarts(model::dataOf(*model), gray,
+                                                                 landmarks::shapeFromBox(model::dataOf(*model), box, "yunet"), starts));
                     }
                 }
                 return Shape2(landmarks::fromLandmarks68(*result->faces[0].landmarks));

@@ -1,4 +1,5 @@
 #include "eval_gaze_synthetic.hpp"
+#include "model/internals.hpp"
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
@@ -66,7 +67,7 @@ double rotationAngleDeg(const Quaternion& a, const Quaternion& b) {
 class TrueGeometryFit {
 public:
     explicit TrueGeometryFit(const Models& models) : face_(models.face), eyes_(models.eyes), rigs_(EyeRig::both(*models.face)) {
-        if (eyes_ && !eyes_->data().iris_net.empty()) net_.emplace(eyes_->data().iris_net, "eye model's iris net");
+        if (eyes_ && !model::dataOf(*eyes_).iris_net.empty()) net_.emplace(model::dataOf(*eyes_).iris_net, "eye model's iris net");
     }
 
     /// Angular errors (degrees, camera frame) of both eyes, exact classes first, classifier maps second.
@@ -77,7 +78,7 @@ public:
         const Landmarks68 landmarks = renderer.landmarks(f);
         const Eigen::Matrix3f R = Eigen::Quaternionf(f.rotation.w, f.rotation.x, f.rotation.y, f.rotation.z).normalized().toRotationMatrix();
         const Eigen::Vector3f t(f.translation_mm.x, f.translation_mm.y, f.translation_mm.z);
-        fit::Camera camera;
+        core::Camera camera;
         camera.fx = f.fx, camera.fy = f.fy, camera.cx = f.cx, camera.cy = f.cy;
         const std::vector<Vec3> mesh = face_->vertices({}, f.expression);
         std::array<gaze::EyeObservation, 2> exact, classified;
@@ -104,8 +105,8 @@ public:
             iris[e] = &eye.iris;
             open[e] = &eye.open;
         }
-        if (net_) gaze::classifyByNet(eyes_->data(), *net_, patches, iris, open);
-        else for (std::size_t e = 0; e < 2; ++e) gaze::classifyByForest(eyes_->data(), eyes_seen_[e].patch.pixels, padded_, eyes_seen_[e].iris, eyes_seen_[e].open);
+        if (net_) gaze::classifyByNet(model::dataOf(*eyes_), *net_, patches, iris, open);
+        else for (std::size_t e = 0; e < 2; ++e) gaze::classifyByForest(model::dataOf(*eyes_), eyes_seen_[e].patch.pixels, padded_, eyes_seen_[e].iris, eyes_seen_[e].open);
         std::array<std::array<double, 2>, 2> out{};
         const gaze::GazeAngles none{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
         for (int k = 0; k < 2; ++k) {
@@ -400,7 +401,7 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
                 landmarkErrors[e].push_back(cornerErrors.back());
                 gaze::EyePatch patch, scratch;
                 if (!gaze::cutEyePatch(gray, l, eye, patch)) continue;
-                const auto refined = gaze::eyeCorners(models.eyes->data(), gray, patch, scratch);
+                const auto refined = gaze::eyeCorners(model::dataOf(*models.eyes), gray, patch, scratch);
                 const Point2 r = midpointError(refined[0], refined[1]);
                 refinedErrors[e].push_back(100.0 * std::hypot(r.x, r.y) / iod);
             }

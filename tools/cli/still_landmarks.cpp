@@ -2,6 +2,7 @@
 
 #include "app/image_view.hpp"
 #include "landmarks/lbf.hpp"
+#include "model/internals.hpp"
 
 #include <filesystem>
 
@@ -53,7 +54,7 @@ Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Bo
         if (dropped) *dropped = true;
     }
     return landmarks::toLandmarks68(
-        landmarks::alignFromStarts(lbf_->data(), gray, landmarks::shapeFromBox(lbf_->data(), box, box_prior_), starts_));
+        landmarks::alignFromStarts(model::dataOf(*lbf_), gray, landmarks::shapeFromBox(model::dataOf(*lbf_), box, box_prior_), starts_));
 }
 
 }  // namespace facetrack::cli

@@ -32,7 +32,7 @@ Eigen::Matrix3Xd baseShape(const DenseModel& m, const Eigen::VectorXd& identity)
 
 /// Frontal, rolled like the eye line, at the depth where the model's eye
 /// corners are as far apart as the observed ones, centred on the points.
-fit::FaceParams coldStart(const DenseModel& m, const Eigen::Matrix3Xd& base, const fit::Camera& camera,
+fit::FaceParams coldStart(const DenseModel& m, const Eigen::Matrix3Xd& base, const core::Camera& camera,
                           const Eigen::Matrix2Xd& observed) {
     fit::FaceParams p;
     p.expression = Eigen::VectorXd::Zero(m.basis.expressionCount());
@@ -74,7 +74,7 @@ double rmsResidual(const DenseModel& m, const Eigen::VectorXd& identity, const D
 
 }  // namespace
 
-Eigen::Matrix2Xd projectPoints(const DenseModel& m, const Eigen::VectorXd& identity, const fit::Camera& camera,
+Eigen::Matrix2Xd projectPoints(const DenseModel& m, const Eigen::VectorXd& identity, const core::Camera& camera,
                                const fit::FaceParams& params) {
     Eigen::Matrix3Xd x;
     fit::slotPositions(m.basis, baseShape(m, identity), params.expression, x);
@@ -112,7 +112,7 @@ std::vector<int> labelledExpressions(const model::FaceModelData& data) {
 DenseFrame teacherFrame(const TeacherMeshes& meshes, int row, const std::vector<int>& vertices) {
     DenseFrame f;
     const auto r = static_cast<std::size_t>(row);
-    f.camera = fit::cameraFor(meshes.width[r], meshes.height[r], 60.0, 0.0);
+    f.camera = core::cameraFor(meshes.width[r], meshes.height[r], 60.0, 0.0);
     const Eigen::Matrix2Xd all = meshes.points(row);
     f.observed.resize(2, static_cast<Eigen::Index>(vertices.size()));
     for (std::size_t i = 0; i < vertices.size(); ++i) f.observed.col(static_cast<Eigen::Index>(i)) = all.col(vertices[i]);
@@ -168,7 +168,7 @@ Eigen::Matrix3Xd learnTeacherConvention(DenseModel& m, const DenseFitSettings& s
 
 DenseFrame canonicalFrame(const Correspondence& c, const Eigen::Matrix3Xd& canonical, const std::vector<int>& vertices, double yawDeg) {
     DenseFrame frame;
-    frame.camera = fit::cameraFor(640, 480, 60.0, 0.0);
+    frame.camera = core::cameraFor(640, 480, 60.0, 0.0);
     const Eigen::Matrix3d turn = fit::rotationOf(fit::omegaFromEuler(Eigen::Vector3d(0.0, yawDeg, 0.0)));
     frame.observed.resize(2, static_cast<Eigen::Index>(vertices.size()));
     for (std::size_t i = 0; i < vertices.size(); ++i) {

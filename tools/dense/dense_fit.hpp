@@ -15,7 +15,7 @@
 
 #include "dense/correspondence.hpp"
 #include "dense/mediapipe_mesh.hpp"
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 #include "fit/face_fitter.hpp"
 #include "fit/fit_basis.hpp"
 #include "fit/pose.hpp"
@@ -51,7 +51,7 @@ DenseModel denseModel(const model::FaceModelData& data, const Correspondence& co
 std::vector<int> labelledExpressions(const model::FaceModelData& data);
 
 struct DenseFrame {
-    fit::Camera camera;
+    core::Camera camera;
     Eigen::Matrix2Xd observed;  ///< 2 x N, pixels, basis slot order
     fit::FaceParams params;     ///< start when `warm`; the result
     double residual = 0.0;      ///< RMS point distance after the fit, eye-corner distances
@@ -89,7 +89,7 @@ DenseFrame canonicalFrame(const Correspondence& correspondence, const Eigen::Mat
                           double yawDeg);
 
 /// The points' projections under params (pixels).
-Eigen::Matrix2Xd projectPoints(const DenseModel& model, const Eigen::VectorXd& identity, const fit::Camera& camera,
+Eigen::Matrix2Xd projectPoints(const DenseModel& model, const Eigen::VectorXd& identity, const core::Camera& camera,
                                const fit::FaceParams& params);
 
 }  // namespace facetrack::dense

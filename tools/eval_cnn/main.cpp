@@ -35,10 +35,11 @@
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
 #include "cli/stats.hpp"
-#include "cnn/cnn_model_data.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
 #include "facetrack/detector.hpp"
-#include "cnn/landmark_net.hpp"
-#include "cnn/update_net.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
 #include "common/faces300w.hpp"
 #include "core/pts.hpp"
 #include "core/shape2d.hpp"
@@ -145,7 +146,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     for (const auto& name : model->expressionNames())
         if (std::find(table.columns.begin(), table.columns.end(), name) != table.columns.end()) labelled.push_back(name);
     const dense::LabelColumns columns = dense::labelColumns(table, labelled);
-    const std::vector<int> labelledIds = cnn::expressionIndices(model->expressionNames(), labelled);
+    const std::vector<int> labelledIds = nn::expressionIndices(model->expressionNames(), labelled);
     TrackerConfig still;
     still.filter.enabled = false;  // frame 2's pose is its own, not smoothed towards frame 1's
     Tracker tracker(shipped, still);
@@ -159,7 +160,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         if (frame.faces.empty() || !frame.faces[0].pose) return false;
         fit::FaceParams p;
         std::vector<int> none;
-        cnn::readParams(*frame.faces[0].pose, {}, none, p);
+        expression::readParams(*frame.faces[0].pose, {}, none, p);
         rotation = fit::rotationOf(p.omega());
         return true;
     };
@@ -196,12 +197,12 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
         Eigen::Matrix3d reference;
     };
     // The fit of the annotated points, cold, with the mean identity (0) or the label's (1).
-    const std::shared_ptr<const fit::FitBasis>& basis = model->fitBasis();
+    const std::shared_ptr<const fit::FitBasis>& basis = fit::basisOf(model);
     const auto annotatedFit = [&](const Crop& c, int identity) {
         fit::FaceFitter fitter(basis, {});
         if (identity == 1) fitter.setIdentity(c.identity.head(std::min<Eigen::Index>(c.identity.size(), basis->identityCount())));
         fit::FaceParams p;
-        fitter.fit(fit::cameraFor(c.grey.cols, c.grey.rows, 60.0, 0.0), c.annotated.cast<double>(), p, false);
+        fitter.fit(core::cameraFor(c.grey.cols, c.grey.rows, 60.0, 0.0), c.annotated.cast<double>(), p, false);
         return fit::rotationOf(p.omega());
     };
     const auto load = [&](const dense::LabelTable::Row& row) {
@@ -252,7 +253,7 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     for (const auto& row : table.rows) {
         if (row.split != split || !referenced(row)) continue;
         const Crop c = load(row);
-        const fit::Camera camera = fit::cameraFor(c.grey.cols, c.grey.rows, 60.0, 0.0);
+        const core::Camera camera = core::cameraFor(c.grey.cols, c.grey.rows, 60.0, 0.0);
         const std::vector<float> identity(c.identity.data(), c.identity.data() + c.identity.size());
         const std::vector<float> expression = profile::nativeWeights(*model, labelledIds, c.label.expression);
         const Eigen::Matrix3d labelRotation = c.reference * offset;
@@ -370,16 +371,16 @@ int run(int argc, char** argv) {
 
     const auto model = FaceModel::loadDefault();  // the shipped tracker's: with the landmark convention
     const auto cascade = CnnModel::load(args.get("--cascade", CnnModel::defaultPath()));
-    const cnn::CnnModelData& data = cascade->data();
+    const nn::CnnModelData& data = model::dataOf(*cascade);
     if (data.stages.empty()) {
         throw Error("'" + args.get("--cascade", CnnModel::defaultPath()) +
                     "' has no cascade stages (a landmark refiner alone): for its landmarks, large poses included, use "
                     "`facetrack eval-landmarks` on 300-W and on build/tools/make_profiled_faces's sets; for the shipped "
                     "tracker's robustness, eval_cnn --tracker");
     }
-    const std::vector<int> expressionIds = cnn::expressionIndices(model->expressionNames(), data.expressions);
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), expressionIds, data.patch_size);
-    std::vector<cnn::PatchNet> nets;
+    const std::vector<int> expressionIds = nn::expressionIndices(model->expressionNames(), data.expressions);
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*model), expressionIds, data.patch_size);
+    std::vector<nn::PatchNet> nets;
     std::vector<std::size_t> roundNet;  // per round, its stage
     for (std::size_t i = 0; i < data.stages.size(); ++i) {
         nets.emplace_back(data.stages[i].onnx, data.patch_size, 6 + static_cast<int>(data.expressions.size()), "stage " + std::to_string(i + 1));
@@ -408,7 +409,7 @@ int run(int argc, char** argv) {
     // The whole pipeline, when the cascade moves the landmarks too.
     std::unique_ptr<Tracker> full;
     if (cascade->hasLandmarkNet()) full = std::make_unique<Tracker>(Models{model, lbfModel, nullptr, cascade}, still);
-    const fit::FitBasis landmarkBasis = cnn::landmarkBasis(*model, expressionIds);  // to carry the annotation to profiled copies
+    const fit::FitBasis landmarkBasis = expression::landmarkBasis(*model, expressionIds);  // to carry the annotation to profiled copies
     DetectorConfig yunet;
     yunet.kind = DetectorKind::YuNet;
     const auto detector = createFaceDetector(yunet);
@@ -416,17 +417,17 @@ int run(int argc, char** argv) {
     // The real crops (no profiling) by the label's |yaw|: 0-15, 15-30, 30-45, over 45 deg.
     std::vector<LandmarkErrors> cropBinLbf(4), cropBinFull(4);
     std::vector<LandmarkErrors> binLbf(kBins), binFull(kBins);
-    cnn::RefineWork work;
+    expression::RefineWork work;
     const auto record = [&](std::vector<RoundErrors>& errors, int round, const fit::FaceParams& params, const fit::FaceParams& label) {
         RoundErrors& e = errors[static_cast<std::size_t>(round)];
         e.rotation_deg.push_back(rotationErrorDeg(params, label));
         e.depth_pct.push_back(100.0 * std::abs(params.pose[5] - label.pose[5]) / label.pose[5]);
         e.expression.push_back((params.expression - label.expression).cwiseAbs().mean());
     };
-    const auto cascadeFrom = [&](fit::FaceParams params, const fit::FaceParams& label, const cv::Mat& grey, const fit::Camera& camera,
+    const auto cascadeFrom = [&](fit::FaceParams params, const fit::FaceParams& label, const cv::Mat& grey, const core::Camera& camera,
                                  std::vector<RoundErrors>& errors) {
         for (int i = 0; i <= iterations; ++i) {
-            if (i > 0) cnn::refine(layout, nets[roundNet[static_cast<std::size_t>(i - 1)]], grey, camera, params, 1, work);
+            if (i > 0) expression::refine(layout, nets[roundNet[static_cast<std::size_t>(i - 1)]], grey, camera, params, 1, work);
             record(errors, i, params, label);
         }
     };
@@ -435,7 +436,7 @@ int run(int argc, char** argv) {
         if (row.split != split) continue;
         const cv::Mat grey = cv::imread(root + "/" + row.key, cv::IMREAD_GRAYSCALE);
         if (grey.empty()) throw Error("cannot read " + root + "/" + row.key);
-        const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+        const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
         const fit::FaceParams label = dense::labelParams(columns, row);
         const Eigen::VectorXd labelIdentity = dense::labelIdentity(columns, row);
         // One image: `starts` perturbed starts, and the tracker's LBF + fit, each through the cascade.
@@ -464,7 +465,7 @@ int run(int argc, char** argv) {
                 move[1] = yawDeg * M_PI / 180.0 * sym(rng);
                 const Eigen::Vector3d centre = fit::rotationOf(truth.omega()) * layout.centre + truth.translation();
                 move.segment<3>(3) = depth * sym(rng) * centre / centre.z();
-                cnn::applyUpdate(layout, move, params);
+                expression::applyUpdate(layout, move, params);
                 cascadeFrom(params, truth, image, camera, perturbed);
             }
             // The tracker starts from YuNet's box of this face (as eval-landmarks does; a crop can show others).
@@ -476,7 +477,7 @@ int run(int argc, char** argv) {
             if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) return false;
             if (full) landmarkErrors(image, *box, points, ofLbf, ofFull);
             fit::FaceParams start;
-            cnn::readParams(*result.faces[0].pose, result.faces[0].expression->native, expressionIds, start);
+            expression::readParams(*result.faces[0].pose, result.faces[0].expression->native, expressionIds, start);
             work.identity_shape = fit::shapeWithIdentity(layout.anchors, Eigen::VectorXd());
             cascadeFrom(start, truth, image, camera, fitted);
             return true;

@@ -20,7 +20,8 @@
 #include "dense/dense_fit.hpp"
 #include "dense/mediapipe_mesh.hpp"
 #include "fit/face_fitter.hpp"
-#include "fit/landmark_convention.hpp"
+#include "model/internals.hpp"
+#include "model/landmark_convention.hpp"
 #include "facetrack/face_model.hpp"
 
 #include <nlohmann/json.hpp>
@@ -97,7 +98,7 @@ void writeRow(std::ofstream& out, const std::string& key, const std::string& spl
 /// convention, against the 300-W annotation: how well the labels agree with human annotators.
 struct LandmarkCheck {
     fit::PointBasis basis;
-    explicit LandmarkCheck(const model::FaceModelData& data, const fit::LandmarkConvention& convention,
+    explicit LandmarkCheck(const model::FaceModelData& data, const model::LandmarkConvention& convention,
                            const std::vector<int>& expressions) {
         std::vector<fit::SurfacePoint> points(model::kLandmarkCount);
         for (int i = 0; i < model::kLandmarkCount; ++i) {
@@ -146,7 +147,7 @@ void learnConvention(Setup& s, const dense::TeacherMeshes& faces, const std::map
     const auto& data = s.data;
     const auto& vertices = s.vertices;
     // The landmark convention's offsets with a flat prior: its prior is learned from these labels.
-    fit::FitBasis offsetsOnly = *FaceModel::loadDefault()->fitBasis();
+    fit::FitBasis offsetsOnly = *fit::basisOf(FaceModel::loadDefault());
     offsetsOnly.expression_prior.setOnes();
     const auto tracked = std::make_shared<const fit::FitBasis>(std::move(offsetsOnly));
     fit::FaceFitter fitter(tracked, fit::FitSettings());
@@ -192,7 +193,7 @@ void learnConvention(Setup& s, const dense::TeacherMeshes& faces, const std::map
 /// Labels every 300-W crop: one view each, so identity is fitted per image. Writes faces300w.csv.
 void label300W(const Setup& s, const dense::TeacherMeshes& meshes, const std::map<std::string, std::string>& splits,
                const std::string& root, const std::string& outDir, int limit, nlohmann::json& summary) {
-    const auto conventionData = fit::readLandmarkConvention(FaceModel::defaultConventionPath());
+    const auto conventionData = model::readLandmarkConvention(FaceModel::defaultConventionPath());
     const LandmarkCheck landmarkCheck(s.data, conventionData, s.model.basis.expressions);
     const auto& vertices = s.vertices;
     std::ofstream out(outDir + "/faces300w.csv");
@@ -286,7 +287,7 @@ int run(int argc, char** argv) {
     nlohmann::json summary;
 
     const auto model = FaceModel::load(FaceModel::defaultPath());
-    const model::FaceModelData& data = model->data();
+    const model::FaceModelData& data = model::dataOf(*model);
     const auto canonical = dense::readCanonicalMesh(args.get("--canonical", "../shared/models/mediapipe-canonical/canonical_face_model.obj"));
 
     // 1. Correspondence.
@@ -325,7 +326,7 @@ int run(int argc, char** argv) {
     const std::vector<std::string> names = dm.basis.expressionNames(data);
     std::vector<std::string> observableNames;
     for (const int e : observable) observableNames.push_back(data.expressions[static_cast<std::size_t>(e)].name);
-    const auto landmarkNames = model->fitBasis()->expressionNames(data);
+    const auto landmarkNames = fit::basisOf(model)->expressionNames(data);
     std::printf("fitted: %zu expressions; observable from the dense points: %zu (68 landmarks: %zu)\n  ", names.size(),
                 observableNames.size(), landmarkNames.size());
     for (const auto& n : observableNames) {

@@ -38,8 +38,8 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
-#include "cnn/landmark_net.hpp"
-#include "cnn/update_net.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
 #include "common/faces300w.hpp"
 #include "common/npy_writer.hpp"
 #include "core/pts.hpp"
@@ -48,6 +48,7 @@
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/tracker.hpp"
+#include "model/internals.hpp"
 #include "profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -79,7 +80,7 @@ struct Perturbation {
 NpyWriter patchWriter(const std::string& path, int size) {
     return NpyWriter(path, "|u1", std::to_string(size) + ", " + std::to_string(size));
 }
-NpyWriter landmarkWriter(const std::string& path) { return NpyWriter(path, "<f4", std::to_string(cnn::kLandmarkOutputs)); }
+NpyWriter landmarkWriter(const std::string& path) { return NpyWriter(path, "<f4", std::to_string(expression::kLandmarkOutputs)); }
 
 /// A labelled image: where its samples come from.
 struct LabelledImage {
@@ -115,7 +116,7 @@ std::optional<fit::FaceParams> trackerStart(const TrackerStarts& from, const cv:
     if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) return std::nullopt;
     const FaceResult& face = result.faces[0];
     fit::FaceParams start;
-    cnn::readParams(*face.pose, face.expression->native, expressions, start);
+    expression::readParams(*face.pose, face.expression->native, expressions, start);
     identity = Eigen::Map<const Eigen::VectorXf>(face.identity.data(), static_cast<Eigen::Index>(face.identity.size())).cast<double>();
     const double offDeg = Eigen::AngleAxisd(fit::rotationOf(start.omega()) * fit::rotationOf(label.omega()).transpose()).angle() * 180.0 / M_PI;
     if (offDeg > from.max_deg) return std::nullopt;
@@ -136,9 +137,9 @@ void writeParams(std::ofstream& out, const fit::FaceParams& p) {
 
 /// Warps one labelled image: the label's own parameters (or the tracker's start), then
 /// `perturb.count` starts perturbed from them. Returns the first patch.
-cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, const Perturbation& perturb,
+cv::Mat samplesOf(const expression::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey, const Perturbation& perturb,
                   std::mt19937& rng, NpyWriter& patches, std::ofstream& samples, const LandmarkTargets& targets) {
-    const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+    const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
     const fit::FaceParams& label = image.label;
     std::uniform_real_distribution<double> sym(-1.0, 1.0);
     std::normal_distribution<double> gauss(0.0, 1.0);
@@ -156,16 +157,16 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
             const Eigen::Vector3d centre = fit::rotationOf(base.omega()) * layout.centre + base.translation();
             move.segment<3>(3) = perturb.depth * sym(rng) * centre / centre.z() +
                                  Eigen::Vector3d(perturb.translation * sym(rng), perturb.translation * sym(rng), 0.0);
-            cnn::applyUpdate(layout, move, start);
+            expression::applyUpdate(layout, move, start);
             for (auto& b : start.expression) b = std::clamp(b + perturb.expression_sigma * gauss(rng), 0.0, 1.0);
         }
-        const Eigen::Matrix2Xd anchors = cnn::projectAnchors(layout, identity, camera, start);
-        cnn::warpFace(layout, grey, anchors, patch);
+        const Eigen::Matrix2Xd anchors = expression::projectAnchors(layout, identity, camera, start);
+        expression::warpFace(layout, grey, anchors, patch);
         patches.add(patch);
         if (targets.out) {
             if (!image.landmarks) throw Error(image.key + ": no annotated points for the landmark targets");
-            const Eigen::VectorXf d = cnn::displacementsOf(cnn::patchToFrame(layout, anchors),
-                                                           cnn::projectedLandmarks(targets.basis, landmarkShape, camera, start, slots), *image.landmarks)
+            const Eigen::VectorXf d = expression::displacementsOf(expression::patchToFrame(layout, anchors),
+                                                           expression::projectedLandmarks(targets.basis, landmarkShape, camera, start, slots), *image.landmarks)
                                           .cast<float>();
             targets.out->add(d.data(), sizeof(float) * static_cast<std::size_t>(d.size()));
         }
@@ -173,7 +174,7 @@ cv::Mat samplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
         writeParams(samples, start);
         writeParams(samples, label);
         char buf[32];
-        for (const double u : cnn::updateBetween(layout, start, label)) std::snprintf(buf, sizeof buf, ",%.6f", u), samples << buf;
+        for (const double u : expression::updateBetween(layout, start, label)) std::snprintf(buf, sizeof buf, ",%.6f", u), samples << buf;
         samples << '\n';
         if (n == 0) own = patch.clone();
     }
@@ -186,7 +187,7 @@ enum class CopyKind { Turned, Moved };
 /// Copies of a 300-W crop made from its fitted mesh (profile/face_profiling.hpp), each with its
 /// samples and its points carried along; with `tracker`, from its start on the copy (none: no
 /// samples). Returns the copies sampled.
-int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, const fit::Camera& camera,
+int copySamplesOf(const expression::WarpLayout& layout, const LabelledImage& image, const core::Camera& camera,
                   const std::vector<profile::ProfiledCopy>& copies, CopyKind kind, const Perturbation& perturb, std::mt19937& rng,
                   NpyWriter& patches, std::ofstream& samples, const LandmarkTargets& targets, const TrackerStarts* tracker) {
     int sampled = 0;
@@ -210,12 +211,12 @@ int copySamplesOf(const cnn::WarpLayout& layout, const LabelledImage& image, con
 }
 
 /// A frame beside its copy turned 40 deg further the way it looks, 240 px high, for the docs.
-cv::Mat profiledPair(const FaceModel& model, const cnn::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey) {
+cv::Mat profiledPair(const FaceModel& model, const expression::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey) {
     const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
     const std::vector<float> native = profile::nativeWeights(model, layout.anchors.expressions, image.label.expression);
     const double yaw = fit::eulerDegrees(image.label.omega()).y();
     const fit::FaceParams turned = profile::turnedBy(image.label, yaw >= 0 ? 40.0 : -40.0);
-    const auto face = profile::profileFace(model, grey, fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity, native, image.label, turned);
+    const auto face = profile::profileFace(model, grey, core::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity, native, image.label, turned);
     cv::Mat pair;
     cv::hconcat(grey, face.image, pair);
     cv::resize(pair, pair, cv::Size(pair.cols * 240 / pair.rows, 240), 0, 0, cv::INTER_AREA);
@@ -254,10 +255,10 @@ int run(int argc, char** argv) {
     std::filesystem::create_directories(outDir);
 
     const auto model = FaceModel::loadDefault();  // with the landmark convention, as the tracker and the landmark net run
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), dense::labelledExpressions(model->data()));
-    const auto names = layout.anchors.expressionNames(model->data());
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*model), dense::labelledExpressions(model::dataOf(*model)));
+    const auto names = layout.anchors.expressionNames(model::dataOf(*model));
     std::mt19937 rng(17);
-    const fit::FitBasis landmarkBasis = cnn::landmarkBasis(*model, layout.anchors.expressions);
+    const fit::FitBasis landmarkBasis = expression::landmarkBasis(*model, layout.anchors.expressions);
     // With --starts-from, the starts are the tracker's answer (LBF, fit, that cascade) on each
     // still image, with its mean identity, as the landmark net sees them at run time.
     std::unique_ptr<Tracker> startTracker;
@@ -326,7 +327,7 @@ int run(int argc, char** argv) {
             image.landmarks = points.cast<double>();
             if (!tracker || (image.start = trackerStart(*tracker, grey, *image.landmarks, image.label, layout.anchors.expressions, image.start_identity)))
                 samplesOf(layout, image, grey, perturb, rng, patches, samples, {landmarkBasis, &landmarks});
-            const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+            const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
             const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
             const auto turned = profile::profiledCopies(*model, grey, camera, identity,
                                                         profile::nativeWeights(*model, layout.anchors.expressions, image.label.expression),

@@ -26,12 +26,13 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
-#include "cnn/face_warp.hpp"
-#include "cnn/landmark_net.hpp"
+#include "expression/face_warp.hpp"
+#include "expression/landmark_net.hpp"
 #include "common/faces300w.hpp"
 #include "core/pts.hpp"
 #include "dense/label_table.hpp"
 #include "facetrack/face_model.hpp"
+#include "model/internals.hpp"
 #include "profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -81,8 +82,8 @@ int run(int argc, char** argv) {
     }
     const dense::LabelColumns columns = dense::labelColumns(table, names);
     // The patch size only scales the carried displacements in and out again.
-    const cnn::WarpLayout layout = cnn::makeWarpLayout(model->data(), expressions);
-    const fit::FitBasis basis = cnn::landmarkBasis(*model, expressions);
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*model), expressions);
+    const fit::FitBasis basis = expression::landmarkBasis(*model, expressions);
 
     // The crops to turn: all of the split, or with --turn-clips that many turned ones, evenly spaced.
     std::vector<const dense::LabelTable::Row*> rows;
@@ -113,7 +114,7 @@ int run(int argc, char** argv) {
         if (grey.empty()) throw Error("cannot read " + root + "/" + row.key);
         const std::string stem = row.key.substr(0, row.key.rfind('.'));
         const fit::Landmarks2d points = core::readPts(root + "/" + stem + ".pts").cast<double>();
-        const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+        const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
         const fit::FaceParams label = dense::labelParams(columns, row);
         const Eigen::VectorXd identity = dense::labelIdentity(columns, row);
         const std::vector<float> identityF(identity.data(), identity.data() + identity.size());

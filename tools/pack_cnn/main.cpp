@@ -41,10 +41,10 @@
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
 #include "dense/label_table.hpp"
-#include "cnn/cnn_model_data.hpp"
+#include "nn/cnn_model_data.hpp"
 #include "core/binary_io.hpp"
-#include "cnn/landmark_net.hpp"
-#include "cnn/update_net.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
 #include "facetrack/face_model.hpp"
 #include "fit/fit_basis.hpp"
 
@@ -138,9 +138,9 @@ int run(int argc, char** argv) {
     if (rounds.size() != nets.size()) throw Error("--rounds needs one count per net");
 
     const auto face = FaceModel::loadDefault();
-    cnn::CnnModelData model;
+    nn::CnnModelData model;
     if (args.has("--base")) {
-        model = cnn::readCnnModel(args.get("--base"));
+        model = nn::readCnnModel(args.get("--base"));
         if (!nets.empty()) model.stages.clear();
     }
     model.provenance = args.get("--provenance", model.provenance);
@@ -151,17 +151,17 @@ int run(int argc, char** argv) {
         const auto names = expressionColumns(nets[i]);
         if (i == 0) model.expressions = names;
         if (names != model.expressions) throw Error(nets[i] + ": its expressions differ from the first net's");
-        cnn::expressionIndices(face->expressionNames(), names);  // every name is the face model's, or it throws
-        cnn::CnnStageData stage;
+        nn::expressionIndices(face->expressionNames(), names);  // every name is the face model's, or it throws
+        nn::CnnStageData stage;
         stage.rounds = std::stoi(rounds[i]);
         stage.onnx = readBytes(nets[i]);
-        cnn::PatchNet check(stage.onnx, model.patch_size, 6 + static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
+        nn::PatchNet check(stage.onnx, model.patch_size, 6 + static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
         model.stages.push_back(std::move(stage));
         std::printf("stage %zu: %s, %d round(s), %zu bytes\n", i + 1, nets[i].c_str(), model.stages.back().rounds, model.stages.back().onnx.size());
     }
     if (args.has("--mirror-average")) {
         if (model.stages.empty()) throw Error("--mirror-average needs cascade stages (--nets)");
-        cnn::updateMirror(model.expressions);  // every sided expression's partner is there, or it throws
+        expression::updateMirror(model.expressions);  // every sided expression's partner is there, or it throws
         model.mirror_averaged = true;
     }
     if (args.has("--landmark-net")) {
@@ -171,7 +171,7 @@ int run(int argc, char** argv) {
             for (const char* axis : {"l_x", "l_y"}) expected.push_back(axis + std::to_string(i));
         if (columns(path) != expected) throw Error(columnsPath(path) + ": expected the 68 landmark displacements l_x0, l_y0, ..., l_y67");
         model.landmark_net = readBytes(path);
-        cnn::PatchNet check(model.landmark_net, model.patch_size, cnn::kLandmarkOutputs, path);
+        nn::PatchNet check(model.landmark_net, model.patch_size, expression::kLandmarkOutputs, path);
         std::printf("landmark net: %s, %zu bytes\n", path.c_str(), model.landmark_net.size());
     }
     if (args.has("--neutral-from") && args.has("--rest-from-validation")) throw Error("--neutral-from or --rest-from-validation, not both");
@@ -212,7 +212,7 @@ int run(int argc, char** argv) {
         if (!layout) throw Error(path + ": its .refiner.txt needs the patch size, 136 mean-shape values and 68 shares");
         float from = 0.f, to = 0.f;
         if (layout >> from >> to) model.refiner_trust_from = from, model.refiner_trust_to = to;
-        cnn::PatchNet check(model.refiner_net, model.refiner_patch_size, 136, path);
+        nn::PatchNet check(model.refiner_net, model.refiner_patch_size, 136, path);
         std::printf("landmark refiner: %s, %d px, %zu bytes, trust ramp %.3f-%.3f\n", path.c_str(), model.refiner_patch_size,
                     model.refiner_net.size(), model.refiner_trust_from, model.refiner_trust_to);
     }
@@ -226,10 +226,10 @@ int run(int argc, char** argv) {
         for (float& v : model.side_mean) layout >> v;
         for (float& v : model.side_share) layout >> v;
         if (!layout) throw Error(path + ": its .side.txt needs the patch size, 22 mean-shape values and 11 shares");
-        cnn::PatchNet check(model.side_net, model.side_patch_size, 22, path);
+        nn::PatchNet check(model.side_net, model.side_patch_size, 22, path);
         std::printf("brow and eye refiner: %s, %d px, %zu bytes\n", path.c_str(), model.side_patch_size, model.side_net.size());
     }
-    cnn::writeCnnModel(args.get("--out"), model);
+    nn::writeCnnModel(args.get("--out"), model);
     std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());
     return 0;
 }

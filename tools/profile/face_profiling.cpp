@@ -1,6 +1,6 @@
 #include "profile/face_profiling.hpp"
 
-#include "cnn/landmark_net.hpp"
+#include "expression/landmark_net.hpp"
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
 
@@ -45,7 +45,7 @@ struct View {
     Eigen::Matrix2Xd projected;  ///< pixels
 };
 
-View viewOf(const std::vector<Vec3>& verticesMm, const fit::Camera& camera, const fit::FaceParams& pose) {
+View viewOf(const std::vector<Vec3>& verticesMm, const core::Camera& camera, const fit::FaceParams& pose) {
     const Eigen::Matrix3d r = fit::rotationOf(pose.omega()) * fit::modelToFrontal();
     View v{Eigen::Matrix3Xd(3, static_cast<Eigen::Index>(verticesMm.size())), Eigen::Matrix2Xd(2, static_cast<Eigen::Index>(verticesMm.size()))};
     for (std::size_t i = 0; i < verticesMm.size(); ++i) {
@@ -135,7 +135,7 @@ void backgroundMap(const View& photographed, const View& turned, int width, int 
 
 }  // namespace
 
-std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
                                          const std::vector<float>& identity, const std::vector<float>& expression,
                                          const fit::FaceParams& label, int tries, std::mt19937& rng) {
     constexpr double kMaxHidden = 0.15, kMaxYawDeg = 85.0;
@@ -153,7 +153,7 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
     return copies;
 }
 
-std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
                                            const std::vector<float>& identity, const std::vector<int>& expressions,
                                            const fit::FaceParams& label, int count, std::mt19937& rng,
                                            const std::vector<std::string>& groups) {
@@ -194,7 +194,7 @@ std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat
     return copies;
 }
 
-std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
                                        const std::vector<float>& identity, const std::vector<float>& expression,
                                        const fit::FaceParams& label, double stepDeg) {
     constexpr double kMaxHidden = 0.15, kMaxYawDeg = 80.0;
@@ -232,7 +232,7 @@ fit::FaceParams turnedBy(const fit::FaceParams& params, double yawDeg) {
     return out;
 }
 
-ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera, const std::vector<float>& identity,
+ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const core::Camera& camera, const std::vector<float>& identity,
                          const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned,
                          const std::vector<float>& turnedExpression) {
     if (source.empty() || source.depth() != CV_8U || (source.channels() != 1 && source.channels() != 3)) {
@@ -293,15 +293,15 @@ ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fi
     return out;
 }
 
-fit::Landmarks2d carriedLandmarks(const cnn::WarpLayout& layout, const fit::FitBasis& basis, const Eigen::VectorXd& identity,
-                                  const fit::Camera& camera, const fit::FaceParams& label, const fit::Landmarks2d& landmarks,
+fit::Landmarks2d carriedLandmarks(const expression::WarpLayout& layout, const fit::FitBasis& basis, const Eigen::VectorXd& identity,
+                                  const core::Camera& camera, const fit::FaceParams& label, const fit::Landmarks2d& landmarks,
                                   const fit::FaceParams& turned) {
     const Eigen::Matrix3Xd shape = fit::shapeWithIdentity(basis, identity);
     Eigen::Matrix3Xd slots;
-    const Eigen::Matrix2d from = cnn::patchToFrame(layout, cnn::projectAnchors(layout, identity, camera, label));
-    const Eigen::VectorXd d = cnn::displacementsOf(from, cnn::projectedLandmarks(basis, shape, camera, label, slots), landmarks);
-    return cnn::displaced(cnn::patchToFrame(layout, cnn::projectAnchors(layout, identity, camera, turned)),
-                          cnn::projectedLandmarks(basis, shape, camera, turned, slots), d);
+    const Eigen::Matrix2d from = expression::patchToFrame(layout, expression::projectAnchors(layout, identity, camera, label));
+    const Eigen::VectorXd d = expression::displacementsOf(from, expression::projectedLandmarks(basis, shape, camera, label, slots), landmarks);
+    return expression::displaced(expression::patchToFrame(layout, expression::projectAnchors(layout, identity, camera, turned)),
+                          expression::projectedLandmarks(basis, shape, camera, turned, slots), d);
 }
 
 }  // namespace facetrack::profile

@@ -21,9 +21,9 @@
 // that was hidden; turning it back across the front reveals its far side,
 // mostly holes.
 
-#include "cnn/face_warp.hpp"
+#include "expression/face_warp.hpp"
 #include "facetrack/face_model.hpp"
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 #include "fit/face_fitter.hpp"
 #include "fit/pose.hpp"
 
@@ -48,7 +48,7 @@ struct ProfiledFace {
 /// `turnedExpression`: the output face's native weights, when they differ
 /// from the photograph's (the mesh X' of the output then has them).
 /// Throws Error on a source that is not 8-bit grey or colour.
-ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera, const std::vector<float>& identity,
+ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const core::Camera& camera, const std::vector<float>& identity,
                          const std::vector<float>& expression, const fit::FaceParams& photographed, const fit::FaceParams& turned,
                          const std::vector<float>& turnedExpression = {});
 
@@ -61,7 +61,7 @@ struct ProfiledCopy {
 /// (either way when |yaw| < 3 deg) to |yaw| uniform in [max(|yaw| + 10, 25),
 /// 85] deg; copies whose head is more than 15 % hidden surface are dropped,
 /// and a face already past 75 deg gets none.
-std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
                                          const std::vector<float>& identity, const std::vector<float>& expression,
                                          const fit::FaceParams& label, int tries, std::mt19937& rng);
 
@@ -75,7 +75,7 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
 /// copies whose shapes moved by a known amount teach a net to read them from
 /// the texture. The label of a copy is the photograph's with the group moved.
 /// Throws Error for a group name it does not know.
-std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
                                            const std::vector<float>& identity, const std::vector<int>& expressions,
                                            const fit::FaceParams& label, int count, std::mt19937& rng,
                                            const std::vector<std::string>& groups = {});
@@ -86,7 +86,7 @@ std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat
 /// across the front soon hides too much: such a face turns one way only).
 /// The first frame is the photograph's own pose. Throws Error unless stepDeg is
 /// in [0.5, 20].
-std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const fit::Camera& camera,
+std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
                                        const std::vector<float>& identity, const std::vector<float>& expression,
                                        const fit::FaceParams& label, double stepDeg);
 
@@ -97,9 +97,9 @@ std::vector<float> nativeWeights(const FaceModel& model, const std::vector<int>&
 /// A photograph's annotated 68 points carried to its copy at `turned`: each
 /// point keeps its displacement from the label's projected landmark in patch
 /// pixels (cnn/landmark_net.hpp); the jaw's projected points follow the
-/// turned silhouette. `basis`: cnn::landmarkBasis for the label's expressions.
-fit::Landmarks2d carriedLandmarks(const cnn::WarpLayout& layout, const fit::FitBasis& basis, const Eigen::VectorXd& identity,
-                                  const fit::Camera& camera, const fit::FaceParams& label, const fit::Landmarks2d& landmarks,
+/// turned silhouette. `basis`: expression::landmarkBasis for the label's expressions.
+fit::Landmarks2d carriedLandmarks(const expression::WarpLayout& layout, const fit::FitBasis& basis, const Eigen::VectorXd& identity,
+                                  const core::Camera& camera, const fit::FaceParams& label, const fit::Landmarks2d& landmarks,
                                   const fit::FaceParams& turned);
 
 /// The pose turned by `yawDeg` about the camera's vertical axis through the

@@ -24,10 +24,11 @@
 #include "dense/label_table.hpp"
 
 #include "core/pts.hpp"
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 #include "fit/face_fitter.hpp"
 #include "fit/fit_basis.hpp"
-#include "fit/landmark_convention.hpp"
+#include "model/internals.hpp"
+#include "model/landmark_convention.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -44,7 +45,7 @@ namespace {
 
 struct Face {
     std::string key;  ///< path relative to the 300-W folder
-    fit::Camera camera;
+    core::Camera camera;
     fit::Landmarks2d observed;
 };
 
@@ -57,7 +58,7 @@ std::vector<Face> loadFaces(const std::string& root, tools::Split split) {
         if (pts.cols() != model::kLandmarkCount) continue;
         Face f;
         f.key = std::filesystem::relative(a.image, root).string();
-        f.camera = fit::cameraFor(image.cols, image.rows, 60.0, 0.0);
+        f.camera = core::cameraFor(image.cols, image.rows, 60.0, 0.0);
         f.observed = pts.cast<double>();
         faces.push_back(f);
     }
@@ -147,10 +148,10 @@ int main(int argc, char** argv) {
         const auto validation = loadFaces(root, tools::Split::Validation);
         std::printf("300-W: %zu training, %zu validation faces\n", train.size(), validation.size());
 
-        fit::FitBasis basis = *model->fitBasis();
+        fit::FitBasis basis = *fit::basisOf(model);
         fit::FitSettings poseOnly;
         poseOnly.expression_l2 = 1.0;  // expressions held near 0: the residual is the convention
-        fit::LandmarkConvention convention;
+        model::LandmarkConvention convention;
         const int rounds = args.integer("--rounds", 3);
         for (int round = 0; round < rounds; ++round) {
             std::vector<std::vector<Eigen::Vector3d>> displacements(model::kLandmarkCount);
@@ -182,7 +183,7 @@ int main(int argc, char** argv) {
             const std::string dir = args.get("--dense-labels");
             const auto labels = readDenseLabels(dir + "/faces300w.csv");
             const auto clipLabels = readDenseLabels(dir + "/clips.csv");
-            const auto names = basis.expressionNames(model->data());
+            const auto names = basis.expressionNames(model::dataOf(*model));
             std::vector<double> moment(names.size(), 0.0);
             for (const auto* set : {&labels, &clipLabels})
                 for (const auto& [key, row] : *set)
@@ -253,14 +254,14 @@ int main(int argc, char** argv) {
         // What it changes on held-out faces, with the tracker's own fit settings.
         const fit::FitSettings settings;
         Eigen::VectorXd before, after;
-        const double rBefore = fitAll(model->fitBasis(), settings, validation, nullptr, &before);
+        const double rBefore = fitAll(fit::basisOf(model), settings, validation, nullptr, &before);
         const double rAfter = fitAll(std::make_shared<const fit::FitBasis>(basis), settings, validation, nullptr, &after);
         std::printf("300-W validation, tracker's fit: residual %.4f -> %.4f; mean expression weights (before -> after):\n", rBefore, rAfter);
-        const auto names = model->fitBasis()->expressionNames(model->data());
+        const auto names = fit::basisOf(model)->expressionNames(model::dataOf(*model));
         for (int k = 0; k < basis.expressionCount(); ++k)
             std::printf("  %-18s %.3f -> %.3f\n", names[static_cast<std::size_t>(k)].c_str(), before[k], after[k]);
         const std::string out = args.get("--out", "models/landmark_convention.ftm");
-        fit::writeLandmarkConvention(out, convention);
+        model::writeLandmarkConvention(out, convention);
         std::printf("wrote %s\n", out.c_str());
         return 0;
     } catch (const std::exception& e) {

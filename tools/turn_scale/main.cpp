@@ -47,9 +47,9 @@ struct Variant {
 };
 
 /// The yaw (deg) of the cold fit of `points`.
-double fittedYaw(const Variant& v, const fit::Camera& camera, const fit::Landmarks2d& points, const Eigen::VectorXd& identity) {
-    fit::FaceFitter fitter(v.model->fitBasis(), {});
-    if (v.own_identity) fitter.setIdentity(identity.head(std::min<Eigen::Index>(identity.size(), v.model->fitBasis()->identityCount())));
+double fittedYaw(const Variant& v, const core::Camera& camera, const fit::Landmarks2d& points, const Eigen::VectorXd& identity) {
+    fit::FaceFitter fitter(fit::basisOf(v.model), {});
+    if (v.own_identity) fitter.setIdentity(identity.head(std::min<Eigen::Index>(identity.size(), fit::basisOf(v.model)->identityCount())));
     fit::FaceParams p;
     fit::Landmarks2d observed = points;
     fit::FitReport report = fitter.fit(camera, observed, p, false);
@@ -76,7 +76,7 @@ int photographs(const std::string& root, const std::string& split) {
         const cv::Mat grey = cv::imread(image.image, cv::IMREAD_GRAYSCALE);
         if (grey.empty()) throw Error("cannot read " + image.image);
         const fit::Landmarks2d points = core::readPts(image.pts).cast<double>();
-        const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+        const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
         const double yawInner = std::abs(fittedYaw(inner, camera, points, {})), yawFull = std::abs(fittedYaw(shipped, camera, points, {}));
         for (Bin& bin : bins) {
             if (yawInner < bin.from || yawInner >= bin.to) continue;
@@ -152,11 +152,11 @@ int run(int argc, char** argv) {
         fit::Landmarks2d points;
         if (!photographYaw.count(stem)) {
             load(root + "/" + label->second->key, grey, points);
-            const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+            const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
             for (const Variant& v : variants) photographYaw[stem].push_back(fittedYaw(v, camera, points, identity));
         }
         load(profiled + "/" + copy, grey, points);
-        const fit::Camera camera = fit::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+        const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
         turns.push_back(copyYaw - label->second->values[static_cast<std::size_t>(yawColumn)]);
         for (std::size_t k = 0; k < variants.size(); ++k)
             changes[k].push_back(fittedYaw(variants[k], camera, points, identity) - photographYaw[stem][k]);

@@ -19,8 +19,11 @@
 
 namespace facetrack {
 
-namespace cnn {
+namespace nn {
 struct CnnModelData;
+}
+namespace model {
+struct Internals;
 }
 
 class CnnModel {
@@ -47,13 +50,11 @@ public:
     /// pose and the shapes the fit estimates, and adds the others (docs/cnn.md).
     bool expressionsOnly() const;
 
-    /// Internal representation, for facetrack's own stages.
-    const cnn::CnnModelData& data() const { return *data_; }
-
-    CnnModel(std::shared_ptr<const cnn::CnnModelData> data, std::string source);
-
 private:
-    std::shared_ptr<const cnn::CnnModelData> data_;
+    friend struct model::Internals;  // facetrack's own stages read the data behind it
+    CnnModel(std::shared_ptr<const nn::CnnModelData> data, std::string source);
+
+    std::shared_ptr<const nn::CnnModelData> data_;
     std::string source_;
 };
 

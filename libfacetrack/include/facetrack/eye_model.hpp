@@ -17,6 +17,9 @@ namespace facetrack {
 namespace gaze {
 struct EyeModelData;
 }
+namespace model {
+struct Internals;
+}
 
 class EyeModel {
 public:
@@ -33,12 +36,10 @@ public:
     /// What it was trained on, as the trainer wrote it.
     const std::string& provenance() const;
 
-    /// Internal representation, for facetrack's own stages.
-    const gaze::EyeModelData& data() const { return *data_; }
-
+private:
+    friend struct model::Internals;  // facetrack's own stages read the data behind it
     EyeModel(std::shared_ptr<const gaze::EyeModelData> data, std::string source);
 
-private:
     std::shared_ptr<const gaze::EyeModelData> data_;
     std::string source_;
 };

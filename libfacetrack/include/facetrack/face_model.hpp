@@ -6,8 +6,7 @@
 /// millimetres (the file stores centimetres, ICT-FaceKit's unit).
 ///
 /// A FaceModel is data: load it once, it is immutable, and one instance can be
-/// shared by any number of Trackers on any threads. What the stages derive
-/// from it (the fit's basis) is built once, at load, and shared with it.
+/// shared by any number of Trackers on any threads.
 
 #include "facetrack/arkit.hpp"
 #include "facetrack/geometry.hpp"
@@ -23,10 +22,9 @@ namespace facetrack {
 namespace model {
 struct FaceModelData;
 struct ArkitMapping;
-}
-namespace fit {
-struct FitBasis;
-}
+struct LandmarkConvention;
+struct Internals;
+}  // namespace model
 
 /// One eyeball of the mesh, on the mean face (millimetres, model frame).
 /// Vertices [first_vertex, last_vertex] are its sclera and iris; gaze turns
@@ -108,16 +106,13 @@ public:
     EyeballGeometry leftEyeball() const;
     EyeballGeometry rightEyeball() const;
 
-    /// Internal representation and derived data, for facetrack's own stages.
-    const model::FaceModelData& data() const { return *data_; }
-    const std::shared_ptr<const fit::FitBasis>& fitBasis() const { return fit_basis_; }
-
+private:
+    friend struct model::Internals;  // facetrack's own stages read the data behind it
     /// `convention` empty: none (the fit uses the model's landmark vertices as they are).
     FaceModel(std::shared_ptr<const model::FaceModelData> data, std::string source, std::string convention = {});
 
-private:
     std::shared_ptr<const model::FaceModelData> data_;
-    std::shared_ptr<const fit::FitBasis> fit_basis_;
+    std::shared_ptr<const model::LandmarkConvention> landmark_convention_;  // null without one
     std::string source_;
     std::string convention_;
     std::vector<std::string> expression_names_;

@@ -17,6 +17,9 @@ namespace facetrack {
 namespace landmarks {
 struct LbfModel;
 }
+namespace model {
+struct Internals;
+}
 
 class LandmarkModel {
 public:
@@ -34,12 +37,10 @@ public:
     int treeDepth() const;
     const std::string& sourcePath() const;
 
-    /// Internal representation, for facetrack's own stages.
-    const landmarks::LbfModel& data() const { return *data_; }
-
+private:
+    friend struct model::Internals;  // facetrack's own stages read the data behind it
     LandmarkModel(std::shared_ptr<const landmarks::LbfModel> data, std::string source);
 
-private:
     std::shared_ptr<const landmarks::LbfModel> data_;
     std::string source_;
 };

@@ -119,6 +119,13 @@ struct CameraIntrinsics {
     int width = 0, height = 0;  ///< the frame's size in pixels
 };
 
+/// One entry of Tracker::stages(). The same names label FrameResult::timings.
+struct StageInfo {
+    std::string name;       ///< "detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "neutral"
+    bool available = false;
+    std::string detail;     ///< what implements it, or why it is not available
+};
+
 /// Wall-clock time one stage took on this frame, summed over faces.
 struct StageTiming {
     std::string stage;  ///< a name of Tracker::stages(): "detect", "verify", "landmarks", "fit", ...

@@ -2,7 +2,7 @@
 /// \file
 /// The Tracker wires the stages into one pipeline:
 ///   frame -> detect (when fewer faces than wanted are followed) -> verify (now and then)
-///         -> per face: landmarks -> refine -> fit -> cnn -> gaze -> filter -> result
+///         -> per face: landmarks -> refine -> fit -> cnn -> gaze -> filter -> neutral -> result
 /// docs/architecture.md shows the data flow. Stages not built yet report
 /// "not available" and leave their fields of FaceResult empty.
 ///
@@ -23,13 +23,6 @@
 #include <vector>
 
 namespace facetrack {
-
-/// One entry of Tracker::stages(). The same names label FrameResult::timings.
-struct StageInfo {
-    std::string name;       ///< "detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter"
-    bool available = false;
-    std::string detail;     ///< what implements it, or why it is not available
-};
 
 /// The models a Tracker uses, loaded once and shared (immutable) by any
 /// number of Trackers on any threads.

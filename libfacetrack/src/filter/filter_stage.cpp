@@ -1,7 +1,7 @@
 #include "filter/filter_stage.hpp"
 
 #include "core/shape2d.hpp"
-#include "filter/one_euro.hpp"
+#include "core/one_euro.hpp"
 #include "fit/pose.hpp"
 
 #include <algorithm>
@@ -20,10 +20,10 @@ constexpr double kTranslationScaleMm = 90.0;  // ~ an eye-corner distance: the u
 constexpr double kFaceMotionGain = 5.0;
 
 struct FilterFaceState final : pipeline::StageState {
-    explicit FilterFaceState(const OneEuroSettings& s)
+    explicit FilterFaceState(const core::OneEuroSettings& s)
         : landmarks(s), rotation(s), translation(s), expression(s), face_motion(s.derivative_cutoff_hz) {}
-    OneEuroFilter landmarks, rotation, translation, expression;
-    MotionSpeed face_motion;  // of the landmarks' centroid
+    core::OneEuroFilter landmarks, rotation, translation, expression;
+    core::MotionSpeed face_motion;  // of the landmarks' centroid
     Eigen::Quaterniond last_rotation = Eigen::Quaterniond::Identity();  // keeps q and -q apart
     // The filters' inputs, sized once.
     Eigen::VectorXd landmark_sample, rotation_sample = Eigen::VectorXd(4), translation_sample = Eigen::VectorXd(3),
@@ -32,21 +32,26 @@ struct FilterFaceState final : pipeline::StageState {
 
 class FilterStage final : public pipeline::Stage {
 public:
-    FilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config, std::vector<int> passThrough)
-        : model_(std::move(model)), config_(config), pass_through_(std::move(passThrough)) {}
+    FilterStage(std::shared_ptr<const FaceModel> model, const core::OneEuroSettings& settings, bool enabled)
+        : model_(std::move(model)), settings_(settings), enabled_(enabled) {}
 
     StageInfo info() const override {
-        if (!config_.enabled) return {"filter", false, "off (TrackerConfig::filter.enabled)"};
+        if (!enabled_) return {"filter", false, "off (TrackerConfig::filter.enabled)"};
         char detail[96];
-        std::snprintf(detail, sizeof detail, "1-euro (min cutoff %g Hz, beta %g)", config_.min_cutoff_hz, config_.beta);
+        std::snprintf(detail, sizeof detail, "1-euro (min cutoff %g Hz, beta %g)", settings_.min_cutoff_hz, settings_.beta);
         return {"filter", true, detail};
     }
 
-    std::unique_ptr<pipeline::StageState> newFaceState() const override {
-        return std::make_unique<FilterFaceState>(OneEuroSettings{config_.min_cutoff_hz, config_.beta, config_.derivative_cutoff_hz});
+    pipeline::Contract contract() const override {
+        using pipeline::Field;
+        return {{}, Field::Raw | Field::Landmarks | Field::Pose | Field::Expression};
     }
 
-    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+    void connect(const pipeline::Upstream& upstream) override { pass_through_ = upstream.smoothed_expressions; }
+
+    std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<FilterFaceState>(settings_); }
+
+    pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         auto& s = static_cast<FilterFaceState&>(*state);
         if (face.fresh) {  // found (again): what the filters hold may be another place
             s.landmarks.reset();
@@ -62,7 +67,7 @@ public:
         if (r.landmarks) filterLandmarks(frame.dt, s, *r.landmarks);
         if (r.pose) filterPose(frame.dt, s, *r.pose);
         if (r.expression) filterExpression(frame.dt, s, *r.expression);
-        return true;
+        return pipeline::Outcome::Ok;
     }
 
 private:
@@ -75,7 +80,7 @@ private:
         }
         centroid /= static_cast<double>(points.size());
         const double scale = std::max(1.f, core::eyeCornerDistance(points));
-        const double faceMotionHz = kFaceMotionGain * config_.beta * s.face_motion(centroid, dt, scale);
+        const double faceMotionHz = kFaceMotionGain * settings_.beta * s.face_motion(centroid, dt, scale);
         const Eigen::VectorXd& smooth = s.landmarks(s.landmark_sample, dt, scale, faceMotionHz);
         for (std::size_t i = 0; i < points.size(); ++i) {
             points[i] = {static_cast<float>(smooth[2 * i]), static_cast<float>(smooth[2 * i + 1])};
@@ -105,15 +110,16 @@ private:
     }
 
     std::shared_ptr<const FaceModel> model_;
-    FilterConfig config_;
-    std::vector<int> pass_through_;
+    core::OneEuroSettings settings_;
+    bool enabled_;
+    std::vector<int> pass_through_;  // native expressions smoothed by an earlier stage
 };
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeFilterStage(std::shared_ptr<const FaceModel> model, const FilterConfig& config,
-                                                 std::vector<int> passThrough) {
-    return std::make_unique<FilterStage>(std::move(model), config, std::move(passThrough));
+std::unique_ptr<pipeline::Stage> makeFilterStage(std::shared_ptr<const FaceModel> model, const core::OneEuroSettings& settings,
+                                                 bool enabled) {
+    return std::make_unique<FilterStage>(std::move(model), settings, enabled);
 }
 
 }  // namespace facetrack::filter

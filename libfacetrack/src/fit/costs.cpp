@@ -40,7 +40,7 @@ bool PointsCost::Evaluate(double const* const* parameters, double* residuals, do
         for (int d = 0; d < 3; ++d) dRotation[d](k % 3, k / 3) = rJet[k].v[d];
     }
 
-    const Camera& cam = *in_.camera;
+    const core::Camera& cam = *in_.camera;
     const double invScale = 1.0 / *in_.scale;
     const double delta2 = in_.huber * in_.huber;
     for (int i = 0; i < count; ++i) {

@@ -3,7 +3,7 @@
 // well under a millisecond; automatic differentiation over ~50 expression
 // weights would cost several times that).
 
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 #include "fit/fit_basis.hpp"
 
 #include <ceres/ceres.h>
@@ -35,7 +35,7 @@ public:
     struct Inputs {
         const PointBasis* basis = nullptr;
         const Eigen::Matrix3Xd* base = nullptr;
-        const Camera* camera = nullptr;
+        const core::Camera* camera = nullptr;
         const double* observed = nullptr;  ///< 2 x N, column-major (u, v) pixels
         const double* scale = nullptr;
         double huber = 0.05;               ///< delta, in units of s

@@ -76,7 +76,7 @@ void slotPositions(const PointBasis& basis, const Eigen::Matrix3Xd& base, const 
     }
 }
 
-Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const core::Camera& camera, const Pose6& pose,
                          const ContourSlots& contour) {
     const Eigen::Matrix3d rotation = rotationOf(pose.head<3>());
     Landmarks2d out;
@@ -87,7 +87,7 @@ Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const
     return out;
 }
 
-ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose) {
+ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const core::Camera& camera, const Pose6& pose) {
     const Eigen::Matrix3d rotation = rotationOf(pose.head<3>());
     auto projected = [&](const Eigen::Vector3d& p) { return camera.project<double>(rotation * p + pose.tail<3>()); };
     ContourSlots chosen{};
@@ -113,7 +113,7 @@ ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& 
     return chosen;
 }
 
-ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const core::Camera& camera, const Pose6& pose,
                               const Landmarks2d& observed) {
     const Eigen::Matrix3d rotation = rotationOf(pose.head<3>());
     ContourSlots chosen{};
@@ -131,14 +131,14 @@ ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, 
     return chosen;
 }
 
-Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
                              const FaceParams& params, const ContourSlots& contour) {
     Eigen::Matrix3Xd x;
     slotPositions(basis, base, params.expression, x);
     return projectSlots(basis, x, camera, params.pose, contour);
 }
 
-ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
                                const FaceParams& params) {
     Eigen::Matrix3Xd x;
     slotPositions(basis, base, params.expression, x);
@@ -289,7 +289,7 @@ void FaceFitter::chooseContour(bool nearest, FitReport& report) {
     setPointFactors(settings_, eulerDegrees(current_.omega()).y(), point_weights_);
 }
 
-FitReport FaceFitter::fit(const Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm) {
+FitReport FaceFitter::fit(const core::Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm) {
     FitReport report;
     report.residual = std::numeric_limits<double>::infinity();
     if (!observed.allFinite()) return report;

@@ -12,7 +12,7 @@
 // tied to fixed vertices: each is matched to the silhouette vertex among its
 // contour candidates (nearestContour), re-chosen as the pose changes.
 
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 #include "fit/costs.hpp"
 #include "fit/fit_basis.hpp"
 #include "fit/pose.hpp"
@@ -85,7 +85,7 @@ using Pose6 = Eigen::Matrix<double, 6, 1>;  ///< (omega, t) as in FaceParams
 void slotPositions(const PointBasis& basis, const Eigen::Matrix3Xd& base, const Eigen::VectorXd& expression, Eigen::Matrix3Xd& x);
 
 /// The 68 landmarks slot positions `x` project to under `pose`, jaw points at `contour`.
-Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const core::Camera& camera, const Pose6& pose,
                          const ContourSlots& contour);
 
 /// For each jaw landmark, the candidate on the silhouette: the one whose
@@ -95,21 +95,21 @@ Landmarks2d projectSlots(const FitBasis& basis, const Eigen::Matrix3Xd& x, const
 /// face's jaw landmarks fall (the synthetic tests and face profiling use it).
 /// Candidates more than 1.5 cm from the landmark along the outline (the model's
 /// y for the sides, x for the chin) are left out: they lie off the path.
-ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose);
+ContourSlots silhouetteContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const core::Camera& camera, const Pose6& pose);
 
 /// For each jaw landmark, the candidate whose projection is nearest the
 /// observed point: the correspondence the fit uses. On real faces the
 /// candidate paths (snapped to mesh vertices) wander off the outline in
 /// places, and the observed point, not the pure geometry, says where on the
 /// outline the annotator's jaw point lies.
-ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const Camera& camera, const Pose6& pose,
+ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, const core::Camera& camera, const Pose6& pose,
                               const Landmarks2d& observed);
 
 /// The same three for a base shape and fitted parameters (they compute the slot
 /// positions, allocating: for tests and tools, not per frame).
-Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
                              const FaceParams& params, const ContourSlots& contour);
-ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const Camera& camera,
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
                                const FaceParams& params);
 
 /// Fits one face frame by frame. Holds a Ceres problem (for cold fits) built
@@ -132,7 +132,7 @@ public:
     /// Fits `params` to `observed` (pixels). Cold: params are initialised from
     /// the points. Warm: params hold the previous frame's fit, the start and
     /// the target of the temporal prior.
-    FitReport fit(const Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm);
+    FitReport fit(const core::Camera& camera, const Landmarks2d& observed, FaceParams& params, bool warm);
 
 private:
     FaceParams initialParams(const Landmarks2d& observed) const;
@@ -152,7 +152,7 @@ private:
 
     // What the costs read through pointers. current_'s pose and expression are
     // the Ceres parameter blocks: sized once, never reallocated.
-    Camera camera_;
+    core::Camera camera_;
     Landmarks2d observed_ = Landmarks2d::Zero();
     double scale_ = 1.0;
     std::array<double, model::kLandmarkCount> point_weights_;  // PointsCost's factor per landmark
@@ -175,7 +175,7 @@ private:
 
 /// One frame of the identity calibration window.
 struct CalibrationFrame {
-    Camera camera;
+    core::Camera camera;
     Landmarks2d observed;
     FaceParams params;  ///< start; refined in place
     ContourSlots contour{};

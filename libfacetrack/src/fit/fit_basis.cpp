@@ -1,9 +1,13 @@
 #include "fit/fit_basis.hpp"
 
+#include "facetrack/error.hpp"
+#include "model/internals.hpp"
+
 #include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <map>
+#include <mutex>
 
 namespace facetrack::fit {
 
@@ -183,6 +187,38 @@ Eigen::Matrix3Xd shapeWithIdentity(const PointBasis& basis, const Eigen::VectorX
     const Eigen::VectorXd offsets = basis.identity * identity;
     shape += Eigen::Map<const Eigen::Matrix3Xd>(offsets.data(), 3, basis.slotCount());
     return shape;
+}
+
+void applyConvention(FitBasis& basis, const model::LandmarkConvention& c, const model::FaceModelData& data) {
+    for (int i = 0; i < model::kLandmarkCount; ++i)
+        basis.neutral.col(basis.landmark_slots[static_cast<std::size_t>(i)]) += c.offsets_frontal_cm.col(i);
+    const auto names = basis.expressionNames(data);
+    basis.expression_prior = Eigen::VectorXd::Ones(basis.expressionCount());
+    for (std::size_t k = 0; k < names.size(); ++k) {
+        const auto it = c.expression_prior.find(names[k]);
+        if (it != c.expression_prior.end()) basis.expression_prior[static_cast<Eigen::Index>(k)] = it->second;
+    }
+}
+
+
+std::shared_ptr<const FitBasis> basisOf(const std::shared_ptr<const FaceModel>& face) {
+    if (!face) throw Error("fit: no face model given");
+    struct Entry {
+        std::weak_ptr<const FaceModel> face;
+        std::shared_ptr<const FitBasis> basis;
+    };
+    static std::mutex mutex;
+    static std::vector<Entry> cache;
+    const std::lock_guard<std::mutex> lock(mutex);
+    cache.erase(std::remove_if(cache.begin(), cache.end(), [](const Entry& e) { return e.face.expired(); }), cache.end());
+    for (const Entry& e : cache) {
+        if (!e.face.owner_before(face) && !face.owner_before(e.face)) return e.basis;
+    }
+    const model::FaceModelData& data = model::dataOf(*face);
+    FitBasis basis = buildFitBasis(data);
+    if (const model::LandmarkConvention* convention = model::Internals::convention(*face)) applyConvention(basis, *convention, data);
+    cache.push_back({face, std::make_shared<const FitBasis>(std::move(basis))});
+    return cache.back().basis;
 }
 
 }  // namespace facetrack::fit

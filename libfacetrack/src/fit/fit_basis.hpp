@@ -10,11 +10,14 @@
 // and -z), so that a frontal head has rotation zero and the angle-axis
 // parameters stay far from their singularity at pi.
 
+#include "facetrack/face_model.hpp"
 #include "model/face_model_data.hpp"
+#include "model/landmark_convention.hpp"
 
 #include <Eigen/Core>
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -93,8 +96,17 @@ struct FitBasis : PointBasis {
 /// With the expressions the 68 landmarks observe (observableExpressions).
 FitBasis buildFitBasis(const model::FaceModelData& data);
 /// With `expressions` (indices into data.expressions), e.g. to project the
-/// landmarks of a face whose other expressions are known (cnn/landmark_net.hpp).
+/// landmarks of a face whose other expressions are known (expression/landmark_net.hpp).
 FitBasis buildFitBasis(const model::FaceModelData& data, const std::vector<int>& expressions);
+
+/// Moves the basis's landmark slots by the convention's offsets and sets its
+/// expression prior (names from `data`).
+void applyConvention(FitBasis& basis, const model::LandmarkConvention& convention, const model::FaceModelData& data);
+
+/// The fit's basis of `face`: buildFitBasis with the face model's landmark
+/// convention applied. Built once per face model and shared by every fit of it
+/// (a cache that holds it while the face model lives). Thread-safe.
+std::shared_ptr<const FitBasis> basisOf(const std::shared_ptr<const FaceModel>& face);
 
 /// neutral + B_id a over the basis slots (3 x S): the shape the per-frame fit
 /// deforms once identity is fixed.

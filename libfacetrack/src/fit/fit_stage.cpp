@@ -45,11 +45,10 @@ struct FitFaceState final : pipeline::StageState {
 
 class FitStage final : public pipeline::Stage {
 public:
-    FitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings, bool haveLandmarks)
-        : model_(std::move(model)), basis_(model_->fitBasis()), settings_(settings), available_(haveLandmarks) {}
+    FitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings)
+        : model_(std::move(model)), basis_(basisOf(model_)), settings_(settings) {}
 
     StageInfo info() const override {
-        if (!available_) return {"fit", false, "not available: needs the landmarks stage"};
         return {"fit", true,
                 "Ceres: pose, " + std::to_string(basis_->expressionCount()) + " expressions, " +
                     std::to_string(basis_->identityCount()) + " identity modes" +
@@ -63,11 +62,15 @@ public:
         return std::make_unique<FitFaceState>(basis_, fitSettings, settings_.calibration_frames);
     }
 
-    std::vector<int> estimatedExpressions() const override { return basis_->expressions; }
+    pipeline::Contract contract() const override {
+        using pipeline::Field;
+        return {Field::Landmarks, Field::Pose | Field::Expression | Field::Identity | Field::Fit | Field::NextStart, basis_->expressions};
+    }
 
-    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+    pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        using pipeline::Outcome;
         auto& s = static_cast<FitFaceState&>(*state);
-        if (!face.result.landmarks) return false;
+        if (!face.result.landmarks) return Outcome::Lost;
         Landmarks2d observed;
         for (int i = 0; i < model::kLandmarkCount; ++i) observed.col(i) << (*face.result.landmarks)[i].x, (*face.result.landmarks)[i].y;
         // A face found again (fresh) starts cold: the previous pose may be the one that slid off it.
@@ -79,17 +82,17 @@ public:
         const double depth = s.params.translation().z();
         if (!(report.residual <= settings_.max_residual) || std::abs(euler.x()) > kMaxPitchDeg ||
             std::abs(euler.y()) > kMaxYawDeg || !(depth >= kMinDepthCm && depth <= kMaxDepthCm)) {
-            return false;
+            return Outcome::Lost;
         }
         const double turnDeg = Eigen::AngleAxisd(rotationOf(s.params.omega()) * before.transpose()).angle() / core::kRadiansPerDegree;
-        face.doubtful = report.residual > kDoubtfulResidualShare * settings_.max_residual || (warm && turnDeg > kDoubtfulTurnDeg);
-        face.unsettled = warm && turnDeg > kUnsettledTurnDeg;
+        const bool doubtful = report.residual > kDoubtfulResidualShare * settings_.max_residual || (warm && turnDeg > kDoubtfulTurnDeg);
+        const bool unsettled = warm && turnDeg > kUnsettledTurnDeg;
         sampleForCalibration(frame, face, s, observed, report);
         writeResult(face, s, report);
-        return true;
+        return doubtful ? Outcome::Doubtful : unsettled ? Outcome::Unsettled : Outcome::Ok;
     }
 
-    void resetCalibration(pipeline::StageState* state) const override {
+    void resetIdentity(pipeline::StageState* state) const override {
         auto& s = static_cast<FitFaceState&>(*state);
         s.fitter.setIdentity({});
         s.calibrated = false;
@@ -144,14 +147,12 @@ private:
     std::shared_ptr<const FaceModel> model_;
     std::shared_ptr<const FitBasis> basis_;
     FitStageSettings settings_;
-    bool available_;
 };
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeFitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings,
-                                              bool haveLandmarks) {
-    return std::make_unique<FitStage>(std::move(model), settings, haveLandmarks);
+std::unique_ptr<pipeline::Stage> makeFitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings) {
+    return std::make_unique<FitStage>(std::move(model), settings);
 }
 
 }  // namespace facetrack::fit

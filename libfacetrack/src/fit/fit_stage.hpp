@@ -4,14 +4,14 @@
 // after that; and the user's identity, estimated once from a window of
 // well-fitted frames, then frozen (calibrateIdentity).
 //
-// Reads: FaceResult::landmarks. Fills: pose, expression, fit_residual,
-// confidence, identity, identity_calibrated, and FaceTrack::next_start (the
+// Reads: landmarks. Writes: pose, expression, identity (and
+// identity_calibrated), fit (fit_residual, confidence), and next start (the
 // fitted face's projection, where the next frame's landmark search starts).
-// Loses the face when the residual exceeds max_residual, |pitch| > 70 deg,
-// |yaw| > 80 deg, or the depth leaves [10 cm, 10 m]. Doubts it (FaceTrack::
-// doubtful) when the residual exceeds 3/4 of max_residual or the head turned
-// more than kDoubtfulTurnDeg since the previous frame: what a fit that slid
-// off a fast-moving face onto its side looks like.
+// Lost: the residual exceeds max_residual, |pitch| > 70 deg, |yaw| > 80 deg,
+// or the depth leaves [10 cm, 10 m]. Doubtful: the residual exceeds 3/4 of
+// max_residual or the head turned more than kDoubtfulTurnDeg since the
+// previous frame, what a fit that slid off a fast-moving face onto its side
+// looks like. Unsettled: it turned more than kUnsettledTurnDeg.
 
 #include "pipeline/stage.hpp"
 
@@ -27,8 +27,6 @@ struct FitStageSettings {
     float expression_prior = 1.f; ///< TrackerConfig::expression_prior: a factor on FitSettings::expression_l2
 };
 
-/// Not available when `haveLandmarks` is false (it fits landmarks).
-std::unique_ptr<pipeline::Stage> makeFitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings,
-                                              bool haveLandmarks);
+std::unique_ptr<pipeline::Stage> makeFitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings);
 
 }  // namespace facetrack::fit

@@ -1,6 +1,7 @@
 #include "facetrack/eye_model.hpp"
 
 #include "core/binary_io.hpp"
+#include "model/internals.hpp"
 #include "facetrack/version.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "gaze/iris_net.hpp"
@@ -180,7 +181,7 @@ EyeModel::EyeModel(std::shared_ptr<const gaze::EyeModelData> data, std::string s
 }
 
 std::shared_ptr<const EyeModel> EyeModel::load(const std::string& path) {
-    return std::make_shared<const EyeModel>(std::make_shared<const gaze::EyeModelData>(gaze::readEyeModel(path)), path);
+    return model::Internals::make(gaze::readEyeModel(path), path);
 }
 
 std::shared_ptr<const EyeModel> EyeModel::loadDefault() { return load(defaultPath()); }

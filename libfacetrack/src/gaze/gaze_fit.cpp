@@ -27,7 +27,7 @@ Eigen::Vector2f toPatch(const EyePatch& p, const Eigen::Vector2f& image) {
     return {a(0, 0) * image.x() + a(0, 1) * image.y() + a(0, 2), a(1, 0) * image.x() + a(1, 1) * image.y() + a(1, 2)};
 }
 
-Eigen::Vector2f project(const fit::Camera& c, const Eigen::Vector3f& p) {
+Eigen::Vector2f project(const core::Camera& c, const Eigen::Vector3f& p) {
     return {static_cast<float>(c.fx) * p.x() / p.z() + static_cast<float>(c.cx),
             static_cast<float>(c.fy) * p.y() / p.z() + static_cast<float>(c.cy)};
 }
@@ -99,7 +99,7 @@ private:
 
 /// The disc of `eye` at `angles`, with its derivatives. False when the iris
 /// is behind the camera or degenerate.
-bool discAt(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles, SoftDisc& disc) {
+bool discAt(const EyeObservation& eye, const Eigen::Matrix3f& R, const core::Camera& camera, const Eigen::Vector2f& angles, SoftDisc& disc) {
     constexpr float h = 0.25f * kDeg;
     ProjectedIris iris;
     std::array<ProjectedIris, 2> moved;
@@ -273,7 +273,7 @@ void priorJacobian(bool havePrevious, const GazeFitSettings& s, Rows&& j) {
 /// The iris probability's centroid back-projected onto the iris sphere: a
 /// starting point that follows saccades without lag. False when there is too
 /// little visible iris.
-bool centroidGuess(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, Eigen::Vector2f& angles) {
+bool centroidGuess(const EyeObservation& eye, const Eigen::Matrix3f& R, const core::Camera& camera, Eigen::Vector2f& angles) {
     double mass = 0, sx = 0, sy = 0;
     for (int y = 0; y < kRegionH; ++y) {
         const float* pi = eye.iris->ptr<float>(y);
@@ -316,12 +316,12 @@ Eigen::Vector3f rotationCentre(const EyeballGeometry& eye, const Vec3& meshCentr
 
 float eyeballRadiusMm() { return std::sqrt(kIrisDistanceMm * kIrisDistanceMm + kIrisRadiusMm * kIrisRadiusMm); }
 
-Eigen::Vector2f irisCentreInImage(const Eigen::Vector3f& centre, const Eigen::Matrix3f& R, const fit::Camera& camera,
+Eigen::Vector2f irisCentreInImage(const Eigen::Vector3f& centre, const Eigen::Matrix3f& R, const core::Camera& camera,
                                   const Eigen::Vector2f& angles) {
     return project(camera, centre + kIrisDistanceMm * (R * gazeDirection(angles.x(), angles.y())));
 }
 
-bool projectIris(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit::Camera& camera, const Eigen::Vector2f& angles,
+bool projectIris(const EyeObservation& eye, const Eigen::Matrix3f& R, const core::Camera& camera, const Eigen::Vector2f& angles,
                  ProjectedIris& out) {
     const Eigen::Vector3f d = R * gazeDirection(angles.x(), angles.y());
     const Eigen::Vector3f c = eye.centre + kIrisDistanceMm * d;
@@ -336,7 +336,7 @@ bool projectIris(const EyeObservation& eye, const Eigen::Matrix3f& R, const fit:
     return true;
 }
 
-GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matrix3f& R, const fit::Camera& camera,
+GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matrix3f& R, const core::Camera& camera,
                    const GazeAngles& previous, bool havePrevious, const GazeFitSettings& s) {
     // Both eyes closed: nothing to see, the gaze holds (the priors alone would drift it towards ahead).
     if (havePrevious && eyes[0].weight <= 0.f && eyes[1].weight <= 0.f) return previous;

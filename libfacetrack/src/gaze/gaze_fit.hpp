@@ -27,7 +27,7 @@
 // pull to straight ahead. A few Gauss-Newton steps (analytic Jacobian) from an
 // initial guess by back-projecting the iris probability's centroid onto the eyeball.
 
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 #include "gaze/eye_patch.hpp"
 
 #include "facetrack/face_model.hpp"
@@ -87,15 +87,15 @@ using GazeAngles = std::array<Eigen::Vector2f, 2>;
 struct ProjectedIris {
     Eigen::Vector2f centre, axis1, axis2;
 };
-bool projectIris(const EyeObservation& eye, const Eigen::Matrix3f& cameraFromHead, const fit::Camera& camera,
+bool projectIris(const EyeObservation& eye, const Eigen::Matrix3f& cameraFromHead, const core::Camera& camera,
                  const Eigen::Vector2f& angles, ProjectedIris& out);
 /// The iris centre at (yaw, pitch) in frame pixels.
 Eigen::Vector2f irisCentreInImage(const Eigen::Vector3f& centre, const Eigen::Matrix3f& cameraFromHead,
-                                  const fit::Camera& camera, const Eigen::Vector2f& angles);
+                                  const core::Camera& camera, const Eigen::Vector2f& angles);
 
 /// The MAP estimate, from `previous` (used by the temporal prior when
 /// `havePrevious`, and as the start for an eye without a usable centroid).
-GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matrix3f& cameraFromHead, const fit::Camera& camera,
+GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matrix3f& cameraFromHead, const core::Camera& camera,
                    const GazeAngles& previous, bool havePrevious, const GazeFitSettings& settings = {});
 
 }  // namespace facetrack::gaze

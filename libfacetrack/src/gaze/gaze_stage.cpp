@@ -2,9 +2,10 @@
 
 #include "gaze/eye_model_data.hpp"
 #include "gaze/eye_patch.hpp"
-#include "filter/one_euro.hpp"
+#include "core/one_euro.hpp"
 #include "gaze/gaze_fit.hpp"
 #include "gaze/iris_net.hpp"
+#include "model/internals.hpp"
 
 #include "facetrack/posed_mesh.hpp"
 
@@ -52,22 +53,22 @@ struct EyeState {
 /// The output's 1-euro filter, on yaw and pitch in degrees: a fixation is held
 /// still (cutoff 0.8 Hz), a saccade of hundreds of degrees a second passes in
 /// about a frame (beta 0.05 per deg/s; the speed itself low-passed at 5 Hz so it rises at once).
-const filter::OneEuroSettings kGazeSmoothing{0.8, 0.05, 5.0};
+const core::OneEuroSettings kGazeSmoothing{0.8, 0.05, 5.0};
 /// The eyeball centres' 1-euro filter, camera frame in mm. They come from the
 /// fit's head pose, whose frame-to-frame jitter moves them by tenths of a
 /// millimetre, and 0.6 mm reads as a 3-degree turn of the eye: a still head's
 /// eyeballs are held still (cutoff 1 Hz), a turning head's followed (beta 1
 /// per mm/s: at 60 deg/s they move ~100 mm/s; beta 0.05 lagged them by a
 /// frame, a 13-degree gaze error).
-const filter::OneEuroSettings kEyeballSmoothing{1.0, 1.0, 1.0};
+const core::OneEuroSettings kEyeballSmoothing{1.0, 1.0, 1.0};
 
 struct GazeFaceState final : pipeline::StageState {
     std::array<EyeState, 2> eyes;  // the subject's left, right
     GazeAngles angles{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};  // the MAP estimate
     bool have_angles = false;
-    filter::OneEuroFilter smoothing{kGazeSmoothing};
+    core::OneEuroFilter smoothing{kGazeSmoothing};
     Eigen::VectorXd sample = Eigen::VectorXd::Zero(4), output = Eigen::VectorXd::Zero(4);
-    filter::OneEuroFilter eyeball_smoothing{kEyeballSmoothing};
+    core::OneEuroFilter eyeball_smoothing{kEyeballSmoothing};
     Eigen::VectorXd eyeball_sample = Eigen::VectorXd::Zero(6);
     std::vector<float> centres_identity;  // the identity the eyeball centres were computed for
     bool have_centres = false;
@@ -139,7 +140,7 @@ public:
           rigs_(EyeRig::both(*face_)),
           shapes_(eyeShapes(*face_)),
           lids_(*face_) {
-        if (!eyes_->data().iris_net.empty()) iris_net_.emplace(eyes_->data().iris_net, "eye model '" + eyes_->sourcePath() + "': its iris net");
+        if (!model::dataOf(*eyes_).iris_net.empty()) iris_net_.emplace(model::dataOf(*eyes_).iris_net, "eye model '" + eyes_->sourcePath() + "': its iris net");
     }
 
     StageInfo info() const override {
@@ -151,16 +152,19 @@ public:
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override {
         auto s = std::make_unique<GazeFaceState>();
-        for (auto& e : s->eyes) e.reference = eyes_->data().open_aperture;
+        for (auto& e : s->eyes) e.reference = model::dataOf(*eyes_).open_aperture;
         return s;
     }
 
-    std::vector<int> estimatedExpressions() const override { return gazeExpressions(*face_); }
+    pipeline::Contract contract() const override {
+        using pipeline::Field;
+        return {Field::Landmarks | Field::Pose | Field::Identity, Field::Gaze | Field::Expression, gazeExpressions(*face_), true};
+    }
 
-    void resetCalibration(pipeline::StageState* state) const override {
+    void resetIdentity(pipeline::StageState* state) const override {
         auto& s = static_cast<GazeFaceState&>(*state);
         for (auto& e : s.eyes) {
-            e.reference = eyes_->data().open_aperture;
+            e.reference = model::dataOf(*eyes_).open_aperture;
             e.samples = 0;
         }
         s.have_centres = false;
@@ -169,12 +173,12 @@ public:
         s.eyeball_smoothing.reset();
     }
 
-    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+    pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         FaceResult& r = face.result;
         auto& s = static_cast<GazeFaceState&>(*state);
         if (!r.landmarks || !r.pose) {
             r.gaze.reset();
-            return true;
+            return pipeline::Outcome::Ok;
         }
         updateCentres(r, s);
         const HeadPose& pose = *r.pose;
@@ -182,7 +186,7 @@ public:
         const Eigen::Matrix3f R = q.normalized().toRotationMatrix();
         const Eigen::Vector3f t(pose.translation_mm.x, pose.translation_mm.y, pose.translation_mm.z);
 
-        const EyeModelData& model = eyes_->data();
+        const EyeModelData& model = model::dataOf(*eyes_);
         std::array<EyeObservation, 2> seen;
         std::array<float, 2> ratio{}, openness{};
         std::array<bool, 2> cut{};
@@ -229,7 +233,7 @@ public:
             eye.reference = std::clamp(eye.reference, model.closed_aperture + 0.6f * (model.open_aperture - model.closed_aperture),
                                        model.closed_aperture + 1.6f * (model.open_aperture - model.closed_aperture));
         }
-        const fit::Camera& camera = frame.camera;
+        const core::Camera& camera = frame.camera;
         // Both eyes closed: the output holds exactly (the filter is not fed, so it does not catch up meanwhile).
         const bool seeing = seen[0].weight > 0.f || seen[1].weight > 0.f || !s.have_angles;
         s.angles = fitGaze(seen, R, camera, s.angles, s.have_angles);
@@ -256,7 +260,7 @@ public:
         }
         r.gaze = gaze;
         writeEyeShapes(r, gaze, ratio);
-        return true;
+        return pipeline::Outcome::Ok;
     }
 
 private:
@@ -270,7 +274,7 @@ private:
     /// is higher). A closing lid over a still iris does not pass: the iris stays
     /// up, so at its pitch the lids still read low.
     void probeLookingDown(const EyeModelData& model, const std::array<bool, 2>& cut, const std::array<float, 2>& forestAperture,
-                          const std::array<float, 2>& aperture, const Eigen::Matrix3f& R, const fit::Camera& camera,
+                          const std::array<float, 2>& aperture, const Eigen::Matrix3f& R, const core::Camera& camera,
                           const GazeFaceState& s, std::array<EyeObservation, 2>& seen, std::array<float, 2>& ratio) const {
         bool partlyCovered = false;
         std::array<EyeObservation, 2> probe = seen;
@@ -332,7 +336,7 @@ private:
     /// mesh's corners (model frame) is averaged over frames (a per-user
     /// refinement that does not follow landmark jitter).
     void placeEyeballs(const std::array<std::array<Point2, 2>, 2>& corners, const Eigen::Matrix3f& R, const Eigen::Vector3f& t,
-                       const fit::Camera& camera, GazeFaceState& s) const {
+                       const core::Camera& camera, GazeFaceState& s) const {
         for (int e = 0; e < 2; ++e) {
             Eigen::Vector3f delta = Eigen::Vector3f::Zero();
             for (int k = 0; k < 2; ++k) {
@@ -419,13 +423,11 @@ float LidsFollowingGaze::share(float pitchDeg) const {
     return (1.f - t) * share_[static_cast<std::size_t>(k)] + t * share_[static_cast<std::size_t>(k + 1)];
 }
 
-std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
-                                               bool haveFit) {
+std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face) {
     if (!eyes) {
         return pipeline::notAvailable("gaze",
                                       "no eye model given (Models::loadDefault() reads " + EyeModel::defaultPath() + " when it exists)");
     }
-    if (!haveFit) return pipeline::notAvailable("gaze", "needs the fit stage's head pose");
     return std::make_unique<GazeStage>(std::move(eyes), std::move(face));
 }
 

@@ -12,10 +12,10 @@
 // (LidsFollowingGaze); an eye that reads partly closed is asked, by a probe
 // fit, whether its iris went down with its lids (a look-down, not a blink).
 //
-// Reads: landmarks, pose, identity. Fills: gaze, and the ARKit eye shapes
+// Reads: landmarks, pose, identity. Writes: gaze, and the ARKit eye shapes
 // (native eyeBlink, eyeLook*, eyeWide of the face model, ARKit recomputed;
-// estimatedExpressions() lists them, and the filter leaves them as they are).
-// Never loses the face.
+// its contract lists them as smoothed already: the filter leaves them as they
+// are). Never loses the face.
 
 #include "pipeline/stage.hpp"
 
@@ -28,9 +28,8 @@
 
 namespace facetrack::gaze {
 
-/// `eyes` null: the stage is not available. Needs pose (the fit stage).
-std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face,
-                                               bool haveFit);
+/// `eyes` null: the stage is not available.
+std::unique_ptr<pipeline::Stage> makeGazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face);
 
 /// Openness -> ARKit weights (docs/gaze.md): eyeBlink = clamp((0.8 - openness) / 0.55),
 /// eyeWide = clamp((ratio - 1.1) / 0.3) with ratio the unclamped aperture ratio;

@@ -4,7 +4,7 @@
 // of which the gaze fit reads the classified region's cells, as it reads the
 // pixel forest's.
 
-#include "core/onnx_net.hpp"
+#include "nn/onnx_net.hpp"
 
 #include <opencv2/core.hpp>
 
@@ -26,11 +26,11 @@ public:
     void classify(const std::array<const cv::Mat*, 2>& patches, const std::array<cv::Mat*, 2>& iris,
                   const std::array<cv::Mat*, 2>& open);
 
-    /// What runs the net (core::OnnxNet::engineName).
+    /// What runs the net (nn::OnnxNet::engineName).
     const char* engineName() const { return net_.engineName(); }
 
 private:
-    core::OnnxNet net_;
+    nn::OnnxNet net_;
 };
 
 }  // namespace facetrack::gaze

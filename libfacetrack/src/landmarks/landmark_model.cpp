@@ -3,6 +3,7 @@
 #include "facetrack/error.hpp"
 #include "facetrack/version.hpp"
 #include "landmarks/lbf_model.hpp"
+#include "model/internals.hpp"
 
 namespace facetrack {
 
@@ -12,8 +13,7 @@ LandmarkModel::LandmarkModel(std::shared_ptr<const landmarks::LbfModel> data, st
 }
 
 std::shared_ptr<const LandmarkModel> LandmarkModel::load(const std::string& path) {
-    auto data = std::make_shared<const landmarks::LbfModel>(landmarks::readLbfModel(path));
-    return std::make_shared<const LandmarkModel>(std::move(data), path);
+    return model::Internals::make(landmarks::readLbfModel(path), path);
 }
 
 std::shared_ptr<const LandmarkModel> LandmarkModel::loadDefault() { return load(defaultPath()); }

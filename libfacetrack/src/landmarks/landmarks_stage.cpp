@@ -3,6 +3,7 @@
 #include "core/box.hpp"
 #include "core/shape2d.hpp"
 #include "landmarks/lbf.hpp"
+#include "model/internals.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -54,20 +55,23 @@ public:
                     model_->sourcePath() + ")"};
     }
 
-    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {
-        const LbfModel& lbf = model_->data();
+    pipeline::Contract contract() const override { return {{}, pipeline::Field::Landmarks}; }
+
+    pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {
+        const LbfModel& lbf = model::dataOf(*model_);
         const Shape68 start = face.fresh || !face.next_start ? shapeFromBox(lbf, face.box, detector_kind_)
                                                              : followingStart(lbf, fromLandmarks68(*face.next_start));
         const Shape68 shape = alignFromStarts(lbf, frame.gray, start, starts_);
-        if (!shape.allFinite()) return false;
+        if (!shape.allFinite()) return pipeline::Outcome::Lost;
         face.result.landmarks = toLandmarks68(shape);
         face.locate(boundsOf(shape));
 
         const Box image{0.f, 0.f, static_cast<float>(frame.gray.cols - 1), static_cast<float>(frame.gray.rows - 1)};
         int outside = 0;
         for (int i = 0; i < kLandmarks; ++i) outside += !core::contains(image, shape(0, i), shape(1, i));
-        return outside <= kMaxOutsideShare * kLandmarks && (shape.col(36) - shape.col(45)).norm() >= kMinEyeCornersPx &&
-               hasTexture(frame.gray, face.box);
+        const bool aFace = outside <= kMaxOutsideShare * kLandmarks && (shape.col(36) - shape.col(45)).norm() >= kMinEyeCornersPx &&
+                           hasTexture(frame.gray, face.box);
+        return aFace ? pipeline::Outcome::Ok : pipeline::Outcome::Lost;
     }
 
 private:

@@ -2,10 +2,10 @@
 
 #include "facetrack/error.hpp"
 #include "facetrack/version.hpp"
-#include "fit/fit_basis.hpp"
-#include "fit/landmark_convention.hpp"
+#include "model/landmark_convention.hpp"
 #include "model/arkit_mapping.hpp"
 #include "model/face_model_data.hpp"
+#include "model/internals.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -17,11 +17,10 @@ FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::stri
     if (!data_) throw Error("FaceModel: null model data");
     for (const auto& e : data_->expressions) expression_names_.push_back(e.name);
     arkit_ = std::make_shared<const model::ArkitMapping>(model::makeArkitMapping(expression_names_));
-    fit::FitBasis basis = fit::buildFitBasis(*data_);
     landmark_offsets_mm_.assign(model::kLandmarkCount, Vec3{0.f, 0.f, 0.f});
     if (!convention_.empty()) {
-        const fit::LandmarkConvention convention = fit::readLandmarkConvention(convention_);
-        fit::applyConvention(basis, convention, *data_);
+        landmark_convention_ = std::make_shared<const model::LandmarkConvention>(model::readLandmarkConvention(convention_));
+        const model::LandmarkConvention& convention = *landmark_convention_;
         // Frontal frame (cm) to model frame (mm): R_0 = diag(1, -1, -1) (fit_basis.hpp).
         for (int i = 0; i < model::kLandmarkCount; ++i) {
             const auto o = convention.offsets_frontal_cm.col(i);
@@ -29,17 +28,14 @@ FaceModel::FaceModel(std::shared_ptr<const model::FaceModelData> data, std::stri
                                                                  static_cast<float>(-10.0 * o.z())};
         }
     }
-    fit_basis_ = std::make_shared<const fit::FitBasis>(std::move(basis));
 }
 
 std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path) {
-    auto data = std::make_shared<const model::FaceModelData>(model::readFaceModel(path));
-    return std::make_shared<const FaceModel>(std::move(data), path);
+    return model::Internals::make(model::readFaceModel(path), path);
 }
 
 std::shared_ptr<const FaceModel> FaceModel::load(const std::string& path, const std::string& conventionPath) {
-    auto data = std::make_shared<const model::FaceModelData>(model::readFaceModel(path));
-    return std::make_shared<const FaceModel>(std::move(data), path, conventionPath);
+    return model::Internals::make(model::readFaceModel(path), path, conventionPath);
 }
 
 std::shared_ptr<const FaceModel> FaceModel::loadDefault() {

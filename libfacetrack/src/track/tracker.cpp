@@ -1,43 +1,40 @@
 #include "facetrack/tracker.hpp"
 
-#include "cnn/cnn_stage.hpp"
-#include "cnn/refine_stage.hpp"
+#include "core/camera.hpp"
 #include "core/environment.hpp"
+#include "expression/cnn_stage.hpp"
 #include "facetrack/error.hpp"
 #include "filter/filter_stage.hpp"
-#include "fit/camera.hpp"
 #include "fit/fit_stage.hpp"
 #include "gaze/gaze_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
 #include "landmarks/lbf.hpp"
+#include "neutral/neutral_stage.hpp"
+#include "refine/refine_stage.hpp"
 #include "track/tracker_core.hpp"
 
 #include <filesystem>
 
 namespace facetrack {
 
+namespace {
+/// The model at `Model::defaultPath()`, or null (logged) when no file is there.
+template <class Model>
+std::shared_ptr<const Model> loadIfPresent(const char* what, const char* stages) {
+    const std::string path = Model::defaultPath();
+    std::error_code ec;
+    if (std::filesystem::exists(path, ec)) return Model::load(path);
+    core::log(std::string(what) + " " + path + " not found: the " + stages + " not available");
+    return nullptr;
+}
+}  // namespace
+
 Models Models::loadDefault() {
     Models models;
     models.face = FaceModel::loadDefault();
-    const std::string lbf = LandmarkModel::defaultPath();
-    std::error_code ec;
-    if (std::filesystem::exists(lbf, ec)) {
-        models.landmarks = LandmarkModel::load(lbf);
-    } else {
-        core::log("landmark model " + lbf + " not found: the landmarks stage is not available");
-    }
-    const std::string eyes = EyeModel::defaultPath();
-    if (std::filesystem::exists(eyes, ec)) {
-        models.eyes = EyeModel::load(eyes);
-    } else {
-        core::log("eye model " + eyes + " not found: the gaze stage is not available");
-    }
-    const std::string cnn = CnnModel::defaultPath();
-    if (std::filesystem::exists(cnn, ec)) {
-        models.cnn = CnnModel::load(cnn);
-    } else {
-        core::log("CNN file " + cnn + " not found: the refine and cnn stages are not available");
-    }
+    models.landmarks = loadIfPresent<LandmarkModel>("landmark model", "landmarks stage is");
+    models.eyes = loadIfPresent<EyeModel>("eye model", "gaze stage is");
+    models.cnn = loadIfPresent<CnnModel>("CNN file", "refine and cnn stages are");
     return models;
 }
 
@@ -57,7 +54,7 @@ void validate(const TrackerConfig& config) {
         throw Error("TrackerConfig::filter: cutoffs must be positive and beta not negative");
     }
     const CameraConfig& c = config.camera;
-    fit::cameraFor(640, 480, c.horizontal_fov_deg, c.focal_length_px, c.principal_x_px, c.principal_y_px);  // validates
+    core::cameraFor(640, 480, c.horizontal_fov_deg, c.focal_length_px, c.principal_x_px, c.principal_y_px);  // validates
 }
 
 namespace {
@@ -68,26 +65,20 @@ void validate(const Models& models, const TrackerConfig& config) {
 }
 
 /// The stage list: the order of execution, of stages() and of the timings.
+/// Each stage declares what it reads and writes (pipeline::Contract); the
+/// TrackerCore checks that every read is written by an earlier stage.
 pipeline::StageList stageList(const Models& models, const TrackerConfig& config, const FaceDetector& detector) {
+    const FilterConfig& f = config.filter;
     pipeline::StageList stages;
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind(), config.landmark_starts));
-    stages.push_back(cnn::makeRefineStage(models.cnn, stages.back().get()));
-    stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}, models.landmarks != nullptr));
-    stages.push_back(config.cnn_stage ? cnn::makeCnnStage(models.cnn, models.face, stages.back().get())
+    stages.push_back(refine::makeRefineStage(models.cnn));
+    stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}));
+    stages.push_back(config.cnn_stage ? expression::makeCnnStage(models.cnn, models.face)
                                       : pipeline::notAvailable("cnn", "off (TrackerConfig::cnn_stage)"));
-    stages.push_back(gaze::makeGazeStage(models.eyes, models.face, models.landmarks != nullptr));
-    // The gaze stage's eye shapes have their own temporal estimate: the filter leaves them as they are.
-    const pipeline::Stage& gazeStage = *stages.back();
-    stages.push_back(filter::makeFilterStage(models.face, config.filter,
-                                             gazeStage.info().available ? gazeStage.estimatedExpressions() : std::vector<int>{}));
+    stages.push_back(gaze::makeGazeStage(models.eyes, models.face));
+    stages.push_back(filter::makeFilterStage(models.face, {f.min_cutoff_hz, f.beta, f.derivative_cutoff_hz}, f.enabled));
+    stages.push_back(neutral::makeNeutralStage(models.face));
     return stages;
-}
-
-/// The face model's eyeLook expressions: a neutral calibration leaves them alone.
-std::vector<bool> eyeLookMask(const FaceModel& face) {
-    std::vector<bool> mask;
-    for (const auto& name : face.expressionNames()) mask.push_back(name.rfind("eyeLook", 0) == 0);
-    return mask;
 }
 
 }  // namespace
@@ -103,8 +94,7 @@ Tracker::Tracker(Models models, const TrackerConfig& config, std::unique_ptr<Fac
     validate(models, config);
     if (!detector) throw Error("Tracker: no face detector given");
     pipeline::StageList stages = stageList(models, config, *detector);
-    track::LifecycleSettings lifecycle{config.max_faces, config.detect_interval, config.verify_interval, config.camera,
-                                       eyeLookMask(*models.face)};
+    track::LifecycleSettings lifecycle{config.max_faces, config.detect_interval, config.verify_interval, config.camera};
     impl_ = std::make_unique<Impl>(
         Impl{std::move(models), track::TrackerCore(std::move(detector), std::move(stages), std::move(lifecycle))});
 }
@@ -130,7 +120,7 @@ FrameResult Tracker::process(const ImageView& frame, double time_s) {
 }
 
 void Tracker::reset() { impl_->core.reset(); }
-void Tracker::resetIdentity() { impl_->core.resetCalibration(); }
+void Tracker::resetIdentity() { impl_->core.resetIdentity(); }
 void Tracker::calibrateNeutral() { impl_->core.calibrateNeutral(true); }
 void Tracker::resetNeutral() { impl_->core.calibrateNeutral(false); }
 std::vector<StageInfo> Tracker::stages() const { return impl_->core.stages(); }

@@ -2,7 +2,6 @@
 
 #include "core/box.hpp"
 #include "core/image.hpp"
-#include "facetrack/arkit.hpp"
 #include "facetrack/error.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -92,24 +91,28 @@ TrackerCore::TrackerCore(std::unique_ptr<FaceDetector> detector, pipeline::Stage
       last_time_(std::numeric_limits<double>::quiet_NaN()) {
     if (!detector_) throw Error("Tracker: no face detector");
     names_ = {"detect", "verify"};
+    // The contracts: each available stage's reads must be written by an
+    // available stage before it; it is told what those provide.
+    pipeline::Upstream upstream;
     for (const auto& stage : stages_) {
         if (!stage) throw Error("Tracker: a null stage in the stage list");
-        const StageInfo info = stage->info();
+        StageInfo info = stage->info();
+        if (info.available) {
+            const pipeline::Fields missing = stage->contract().reads - upstream.written;
+            if (missing.empty()) {
+                stage->connect(upstream);
+                pipeline::provide(stage->contract(), upstream);
+            } else {
+                info = {info.name, false, "not available: needs " + missing.names() + ", which no stage before it writes"};
+            }
+        }
         names_.push_back(info.name);
-        available_.push_back(info.available);
+        infos_.push_back(std::move(info));
     }
+    expressions_ = upstream.expressions;
     ms_.assign(names_.size(), 0.0);
     ran_.assign(names_.size(), false);
     tracks_.reserve(static_cast<std::size_t>(settings_.max_faces));
-}
-
-std::vector<int> TrackerCore::estimatedExpressions() const {
-    std::vector<int> out;
-    for (const auto& stage : stages_) {
-        if (!stage->info().available) continue;
-        for (const int k : stage->estimatedExpressions()) out.push_back(k);
-    }
-    return out;
 }
 
 std::vector<StageInfo> TrackerCore::stages() const {
@@ -122,13 +125,18 @@ std::vector<StageInfo> TrackerCore::stages() const {
                                   "the detector on a crop around each followed face, every " +
                                       std::to_string(settings_.verify_interval) + " frames and when a face is in doubt"}
                       : StageInfo{"verify", false, "off (TrackerConfig::verify_interval is 0)"});
-    for (const auto& stage : stages_) out.push_back(stage->info());
+    out.insert(out.end(), infos_.begin(), infos_.end());
     return out;
 }
 
 void TrackerCore::time(int slot, Clock::time_point start) {
     ms_[slot] += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     ran_[slot] = true;
+}
+
+void TrackerCore::ensureGray(const ImageView& frame) {
+    if (!gray_ready_) gray_ = core::toGray(frame, gray_);
+    gray_ready_ = true;
 }
 
 void TrackerCore::addFace(const Box& box, float score) {
@@ -195,133 +203,119 @@ bool TrackerCore::verify(pipeline::FaceTrack& face, Check why) {
     return !taken;
 }
 
-void TrackerCore::runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face) {
-    bool ranAgain = false, doubted = false;
-    for (std::size_t k = 0; k < stages_.size() && !face.lost;) {
-        if (available_[k]) {
-            const auto start = Clock::now();
-            face.lost = !stages_[k]->run(input, face, face.states[k].get());
-            time(kFirstStage + static_cast<int>(k), start);
-        }
-        // A stage doubts a followed face or finds it far from the previous frame's
-        // answer (a fast turn): it runs once more, with the stages before it, from
-        // where this pass left the face. After a turn the landmarks then start
-        // from the new pose, not the previous frame's (docs/fitting.md, "Tracking").
-        if ((face.doubtful || face.unsettled) && !face.fresh && !face.lost && !ranAgain) {
-            ranAgain = true;
-            doubted = face.doubtful;
-            face.unsettled = false;
-            k = 0;
-            continue;
-        }
-        ++k;
+pipeline::Outcome TrackerCore::sweep(const pipeline::FrameInput& input, pipeline::FaceTrack& face, bool stopAtDoubt) {
+    using pipeline::Outcome;
+    Outcome worst = Outcome::Ok;
+    for (std::size_t k = 0; k < stages_.size(); ++k) {
+        if (!infos_[k].available) continue;
+        const auto start = Clock::now();
+        const Outcome outcome = stages_[k]->run(input, face, face.states[k].get());
+        time(kFirstStage + static_cast<int>(k), start);
+        worst = pipeline::worse(worst, outcome);
+        if (outcome == Outcome::Lost || (stopAtDoubt && outcome != Outcome::Ok)) break;
     }
-    face.doubtful = face.doubtful || doubted;  // the first pass's doubt stands: verify() checks it
-    // A face no stage could place is not followed: found again by the next search.
-    if (!face.located) face.lost = true;
+    return worst;
 }
 
-namespace {
-/// w' = (w - w0) / (1 - w0), clamped to [0, 1], for every weight but the eyes'
-/// look directions (a neutral face may look anywhere). No allocation.
-void relativeToNeutral(const ExpressionResult& neutral, const std::vector<bool>& keepNative, ExpressionResult& e) {
-    const auto rescale = [](float w, float w0) { return w0 < 0.99f ? std::clamp((w - w0) / (1.f - w0), 0.f, 1.f) : w; };
-    static const auto keepArkit = [] {
-        std::array<bool, kArkitBlendshapeCount> keep{};
-        for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = arkitNames()[k].substr(0, 7) == "eyeLook";
-        return keep;
-    }();
-    for (std::size_t k = 0; k < e.arkit.size(); ++k) {
-        if (keepArkit[k]) continue;
-        e.arkit[k] = rescale(e.arkit[k], neutral.arkit[k]);
+pipeline::Outcome TrackerCore::runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face) {
+    using pipeline::Outcome;
+    // A followed face that a stage doubts, or finds far from the previous
+    // frame's answer (a fast turn), runs once more from where that stage left
+    // it, every stage from the first: after a turn the landmarks then start
+    // from the new pose, not the previous frame's (docs/fitting.md, "Tracking").
+    const bool followed = !face.fresh;
+    Outcome outcome = sweep(input, face, followed);
+    if (followed && (outcome == Outcome::Doubtful || outcome == Outcome::Unsettled)) {
+        const Outcome again = sweep(input, face, false);
+        // The first sweep's doubt stands: the detector still checks the face.
+        outcome = again == Outcome::Lost ? again : outcome == Outcome::Doubtful ? Outcome::Doubtful : again;
     }
-    if (neutral.native.size() != e.native.size()) return;
-    for (std::size_t k = 0; k < e.native.size(); ++k) {
-        if (k < keepNative.size() && keepNative[k]) continue;
-        e.native[k] = rescale(e.native[k], neutral.native[k]);
-    }
+    // A face no stage could place is not followed: found again by the next search.
+    return face.located ? outcome : Outcome::Lost;
 }
-}  // namespace
+
+void TrackerCore::follow(const pipeline::FrameInput& input, pipeline::FaceTrack& face) {
+    using pipeline::Outcome;
+    ensureGray(input.colour);
+    const bool verifying = settings_.verify_interval > 0;
+    Outcome outcome = runStages(input, face);
+    // A followed face no stage could place (the fit past its limits after a fast
+    // move) is looked for where it was: found, it runs again from the detection and
+    // keeps its id and what its stages hold (the identity); else it is lost.
+    face.lost = outcome == Outcome::Lost;
+    if (face.lost && !face.fresh && verifying && verify(face, Check::Unplaced)) {
+        face.located = false;
+        outcome = runStages(input, face);
+        face.lost = outcome == Outcome::Lost;
+    }
+    face.doubtful = outcome == Outcome::Doubtful;
+    // What is followed must still look like what was followed a frame ago.
+    bool seen = !face.lost && appearanceOf(gray_, face.box, appearance_);
+    if (seen && !face.fresh && !face.appearance.empty() && alike(appearance_, face.appearance) < kAlike) face.doubtful = true;
+    // A face in doubt is checked now; one the detector sees elsewhere runs again
+    // from there. Without a detection it stays (blur hides faces from it too).
+    if (!face.lost && face.doubtful && !face.fresh && verifying && verify(face, Check::InDoubt)) {
+        face.located = false;
+        face.lost = runStages(input, face) == Outcome::Lost;
+        seen = !face.lost && appearanceOf(gray_, face.box, appearance_);
+    }
+    // The next frame compares with this one. Copied, not swapped: a track whose buffer has
+    // no memory yet would leave appearance_ without any, and the next frame would allocate
+    // (256 floats; the copy reuses face.appearance's memory once it has some).
+    if (seen) face.appearance.assign(appearance_.begin(), appearance_.end());
+    else face.appearance.clear();
+}
 
 void TrackerCore::dropLost() {
     tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(), [](const pipeline::FaceTrack& t) { return t.lost; }),
                   tracks_.end());
 }
 
-void TrackerCore::process(const ImageView& frame, double time_s, const std::vector<Box>* boxes, FrameResult& out) {
+pipeline::FrameInput TrackerCore::beginFrame(const ImageView& frame, double time_s, FrameResult& out) {
     core::wrap(frame);  // validates the view before anything reads it
     const CameraConfig& c = settings_.camera;
     pipeline::FrameInput input{frame, gray_,
-                               fit::cameraFor(frame.width, frame.height, c.horizontal_fov_deg, c.focal_length_px,
-                                              c.principal_x_px, c.principal_y_px)};
+                               core::cameraFor(frame.width, frame.height, c.horizontal_fov_deg, c.focal_length_px,
+                                               c.principal_x_px, c.principal_y_px)};
     out.camera = {static_cast<float>(input.camera.fx), static_cast<float>(input.camera.fy),
                   static_cast<float>(input.camera.cx), static_cast<float>(input.camera.cy), frame.width, frame.height};
     // Time must increase; anything else (repeated, backwards, NaN) counts as one frame at 30 fps.
     const bool increasing = std::isfinite(time_s) && (!std::isfinite(last_time_) || time_s > last_time_);
     input.dt = increasing && std::isfinite(last_time_) ? time_s - last_time_ : 1.0 / 30.0;
     if (increasing) last_time_ = time_s;
-    const long frameIndex = frame_index_++;
+    ++frame_index_;
+    gray_ready_ = false;
     std::fill(ms_.begin(), ms_.end(), 0.0);
     std::fill(ran_.begin(), ran_.end(), false);
-    for (auto& t : tracks_) t.located = t.doubtful = t.unsettled = false;
+    for (auto& t : tracks_) t.located = t.doubtful = false;
+    return input;
+}
 
-    // Faces first: new ones from the detector or the caller, followed ones verified now and then.
+bool TrackerCore::findFaces(const ImageView& frame, const std::vector<Box>* boxes) {
     const int followed = static_cast<int>(tracks_.size());
-    bool searched = false;
     if (boxes) {
         for (const Box& box : *boxes) addFace(box, 1.f);
-        searched = true;
-    } else if (followed < settings_.max_faces && (followed == 0 || frameIndex % settings_.detect_interval == 0)) {
+        return true;
+    }
+    // frame_index_ counts this frame already: the first frame is 0.
+    if (followed < settings_.max_faces && (followed == 0 || (frame_index_ - 1) % settings_.detect_interval == 0)) {
         detect(frame);
-        searched = true;
+        return true;
     }
-    bool grayReady = false;
-    auto ensureGray = [&] {
-        if (!grayReady) gray_ = core::toGray(frame, gray_);
-        grayReady = true;
-    };
-    if (settings_.verify_interval > 0) {
-        for (auto& t : tracks_) {
-            if (t.fresh || t.age % settings_.verify_interval != 0) continue;
-            ensureGray();
-            verify(t, Check::Periodic);
-        }
-        dropLost();
-    }
+    return false;
+}
 
-    for (int pass = 0; pass < 2; ++pass) {
-        if (!tracks_.empty()) ensureGray();
-        for (auto& t : tracks_) {
-            runStages(input, t);
-            // A followed face no stage could place (the fit past its limits after a fast
-            // move) is looked for where it was: found, it runs again from the detection and
-            // keeps its id and what its stages hold (the identity); else it is lost.
-            if (t.lost && !t.fresh && settings_.verify_interval > 0 && verify(t, Check::Unplaced)) {
-                t.located = false;
-                runStages(input, t);
-            }
-            bool seen = !t.lost && appearanceOf(gray_, t.box, appearance_);
-            if (seen && !t.fresh && !t.appearance.empty() && alike(appearance_, t.appearance) < kAlike) t.doubtful = true;
-            // A face a stage doubts is checked now; one the detector sees elsewhere runs
-            // again from there. Without a detection it stays (blur hides faces from it too).
-            if (!t.lost && t.doubtful && !t.fresh && settings_.verify_interval > 0 && verify(t, Check::InDoubt)) {
-                t.located = false;
-                runStages(input, t);
-                seen = !t.lost && appearanceOf(gray_, t.box, appearance_);
-            }
-            // The next frame compares with this one. Copied, not swapped: a track whose buffer has
-            // no memory yet would leave appearance_ without any, and the next frame would allocate
-            // (256 floats; the copy reuses t.appearance's memory once it has some).
-            if (seen) t.appearance.assign(appearance_.begin(), appearance_.end());
-            else t.appearance.clear();
-        }
-        dropLost();
-        // Every followed face was lost: look again in this very frame.
-        if (!tracks_.empty() || searched) break;
-        detect(frame);
-        searched = true;
+void TrackerCore::verifyNowAndThen(const ImageView& frame) {
+    if (settings_.verify_interval <= 0) return;
+    for (auto& t : tracks_) {
+        if (t.fresh || t.age % settings_.verify_interval != 0) continue;
+        ensureGray(frame);
+        verify(t, Check::Periodic);
     }
+    dropLost();
+}
 
+void TrackerCore::report(FrameResult& out) {
     out.faces.resize(tracks_.size());
     for (std::size_t i = 0; i < tracks_.size(); ++i) {
         pipeline::FaceTrack& t = tracks_[i];
@@ -329,7 +323,6 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
         t.result.tracked = !t.fresh;
         t.result.box = t.box;
         out.faces[i] = t.result;
-        if (t.neutral && out.faces[i].expression) relativeToNeutral(*t.neutral, settings_.neutral_keeps_native, *out.faces[i].expression);
         t.fresh = false;
         ++t.age;
     }
@@ -343,6 +336,20 @@ void TrackerCore::process(const ImageView& frame, double time_s, const std::vect
     }
 }
 
+void TrackerCore::process(const ImageView& frame, double time_s, const std::vector<Box>* boxes, FrameResult& out) {
+    const pipeline::FrameInput input = beginFrame(frame, time_s, out);
+    const bool searched = findFaces(frame, boxes);  // the caller's boxes, or the detector now and then
+    verifyNowAndThen(frame);                        // followed faces, every verify_interval frames
+    for (auto& face : tracks_) follow(input, face);
+    dropLost();
+    if (tracks_.empty() && !searched) {  // every followed face was lost: look again in this very frame
+        detect(frame);
+        for (auto& face : tracks_) follow(input, face);
+        dropLost();
+    }
+    report(out);
+}
+
 void TrackerCore::reset() {
     tracks_.clear();
     last_time_ = std::numeric_limits<double>::quiet_NaN();
@@ -350,18 +357,16 @@ void TrackerCore::reset() {
 
 void TrackerCore::calibrateNeutral(bool on) {
     for (auto& t : tracks_) {
-        if (on && t.result.expression) {
-            t.neutral = t.result.expression;
-        } else {
-            t.neutral.reset();
+        for (std::size_t k = 0; k < stages_.size(); ++k) {
+            if (t.states[k]) stages_[k]->calibrateNeutral(t.states[k].get(), on);
         }
     }
 }
 
-void TrackerCore::resetCalibration() {
+void TrackerCore::resetIdentity() {
     for (auto& t : tracks_) {
         for (std::size_t k = 0; k < stages_.size(); ++k) {
-            if (t.states[k]) stages_[k]->resetCalibration(t.states[k].get());
+            if (t.states[k]) stages_[k]->resetIdentity(t.states[k].get());
         }
     }
 }

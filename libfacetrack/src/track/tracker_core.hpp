@@ -1,7 +1,9 @@
 #pragma once
 // What the public Tracker runs: the track lifecycle (detect, verify,
 // re-detect, ids) around an ordered list of stages, each timed under its own
-// name. Tests drive it with fake detectors and fake stages.
+// name. At construction it checks the stages' contracts (pipeline/stage.hpp):
+// a stage whose reads no earlier available stage writes is not available.
+// Tests drive it with fake detectors and fake stages.
 
 #include "pipeline/stage.hpp"
 
@@ -20,9 +22,6 @@ struct LifecycleSettings {
     int detect_interval = 15;  ///< TrackerConfig::detect_interval
     int verify_interval = 30;  ///< TrackerConfig::verify_interval
     CameraConfig camera;
-    /// Native expressions a neutral calibration leaves alone (the eyes' look
-    /// directions: a neutral face may look anywhere), as a mask over them.
-    std::vector<bool> neutral_keeps_native;
 };
 
 class TrackerCore {
@@ -30,20 +29,20 @@ public:
     TrackerCore(std::unique_ptr<FaceDetector> detector, pipeline::StageList stages, const LifecycleSettings& settings);
 
     /// One frame: find or confirm faces (the detector, or `boxes` when not
-    /// null), run every available stage on every face in list order, drop the
-    /// faces a stage lost (and look again in this frame when none is left),
-    /// and write the faces and per-stage timings into `out`.
+    /// null), follow every face through the stages (follow()), drop the faces
+    /// lost (and look again in this frame when none is left), and write the
+    /// faces and per-stage timings into `out`.
     void process(const ImageView& frame, double time_s, const std::vector<Box>* boxes, FrameResult& out);
 
     void reset();
-    void resetCalibration();
+    void resetIdentity();
     /// Takes each followed face's current expression as its neutral; off: forgets them.
     void calibrateNeutral(bool on);
 
     /// "detect", "verify", then the stages, in order.
     std::vector<StageInfo> stages() const;
     /// The native expressions some available stage estimates.
-    std::vector<int> estimatedExpressions() const;
+    const std::vector<int>& estimatedExpressions() const { return expressions_; }
 
 private:
     using Clock = std::chrono::steady_clock;
@@ -64,13 +63,39 @@ private:
     /// detection (fresh, with its id and its stages' state; returns true), or is
     /// lost when another followed face is there already.
     bool verify(pipeline::FaceTrack& face, Check why);
-    void runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face);
+    /// The re-run policy, in one place, for one face of one frame. The face
+    /// runs the stages (runStages: a second sweep when a stage doubts it or
+    /// it turned fast). Lost while followed, the detector looks where it was
+    /// (Check::Unplaced): found, the face restarts there and runs once more.
+    /// Its box no longer looking like the last frame's puts it in doubt. In
+    /// doubt while followed, the detector checks it (Check::InDoubt): seen
+    /// elsewhere, it restarts there and runs once more. So a face sweeps the
+    /// stages at most three times a frame.
+    void follow(const pipeline::FrameInput& input, pipeline::FaceTrack& face);
+    /// The stages in list order on `face`, once or twice (a doubt or a turn).
+    pipeline::Outcome runStages(const pipeline::FrameInput& input, pipeline::FaceTrack& face);
+    /// One sweep over the stages; stops at a lost face, and, when
+    /// `stopAtDoubt`, at the first stage that doubts or unsettles it.
+    /// Returns the worst outcome met.
+    pipeline::Outcome sweep(const pipeline::FrameInput& input, pipeline::FaceTrack& face, bool stopAtDoubt);
+    /// Validates the frame, starts its clock and timings; the stages' view of it.
+    pipeline::FrameInput beginFrame(const ImageView& frame, double time_s, FrameResult& out);
+    /// New faces from `boxes`, or from the detector while fewer than
+    /// max_faces are followed (every detect_interval frames, every frame
+    /// while none is). Returns whether it looked.
+    bool findFaces(const ImageView& frame, const std::vector<Box>* boxes);
+    /// Checks each followed face with the detector every verify_interval frames.
+    void verifyNowAndThen(const ImageView& frame);
+    void ensureGray(const ImageView& frame);
+    /// The faces and the stages' timings of this frame into `out`.
+    void report(FrameResult& out);
     void dropLost();
     void time(int slot, Clock::time_point start);
 
     std::unique_ptr<FaceDetector> detector_;
     pipeline::StageList stages_;
-    std::vector<bool> available_;
+    std::vector<StageInfo> infos_;    // per stage, as checked against the contracts
+    std::vector<int> expressions_;    // estimated by some available stage
     std::vector<std::string> names_;  // per timing slot
     std::vector<double> ms_;          // per timing slot, this frame
     std::vector<bool> ran_;
@@ -78,6 +103,7 @@ private:
 
     std::vector<pipeline::FaceTrack> tracks_;
     cv::Mat gray_, crop_;     // reused frame to frame
+    bool gray_ready_ = false; // gray_ holds this frame
     std::vector<float> appearance_;
     int next_id_ = 1;
     long frame_index_ = 0;

@@ -38,7 +38,7 @@
 // face patch's resolution (docs/cnn.md, session 28). The refine stage reads
 // both sides' patches in one call of the net (session 29).
 
-#include "cnn/cnn_model_data.hpp"
+#include "nn/cnn_model_data.hpp"
 #include "core/shape2d.hpp"
 #include "landmarks/lbf_model.hpp"
 
@@ -48,9 +48,11 @@
 #include <array>
 #include <vector>
 
-namespace facetrack::cnn {
-
+namespace facetrack::nn {
 class PatchNet;
+}
+
+namespace facetrack::refine {
 
 struct RefinerLayout {
     int size = 0;                       ///< the patch's side, pixels
@@ -60,7 +62,7 @@ struct RefinerLayout {
 };
 
 /// The layout a model file stores (cnn_model_data.hpp: patch size, 136 mean values, 68 shares, D0, D1).
-RefinerLayout makeRefinerLayout(const CnnModelData& data);
+RefinerLayout makeRefinerLayout(const nn::CnnModelData& data);
 
 /// g above: how far the net alone is trusted, in [0, 1].
 float netTrust(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf);
@@ -90,7 +92,7 @@ struct SideLayout {
 };
 
 /// The layout a model file stores (cnn_model_data.hpp: patch size, 22 mean values, 11 shares).
-SideLayout makeSideLayout(const CnnModelData& data);
+SideLayout makeSideLayout(const nn::CnnModelData& data);
 
 /// One side of `shape` in its patch's frame: `mirrored` (the left side) mirrors x in a frame
 /// `width` pixels wide.
@@ -109,10 +111,10 @@ void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen
 /// Both sides of `shape` moved by the side net `net` (batch 2) in one call: each side's patch
 /// (warpSide) into `patches` (reused), the net's answers placed (placeSide). A side whose
 /// answer is not finite keeps its points.
-void refineSides(const SideLayout& layout, PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape);
+void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape);
 
 /// q above from the net's outputs d, g from this face alone (a still image).
 landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,
                                     const landmarks::Shape68& lbf);
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::refine

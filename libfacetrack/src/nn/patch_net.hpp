@@ -1,5 +1,5 @@
 #pragma once
-// A CNN on a square grey patch, run by core::OnnxNet (the own kernels, or
+// A CNN on a square grey patch, run by nn::OnnxNet (the own kernels, or
 // OpenCV's dnn): the cascade's stages' updates (update_net.hpp) and landmark
 // displacements (landmark_net.hpp) on the face patch (face_warp.hpp), and the
 // landmark and brow refiners (landmark_refiner.hpp). Trained by
@@ -10,7 +10,7 @@
 // read a batch of patches in one call (the brow and eye refiner's two sides):
 // one call costs less than two.
 
-#include "core/onnx_net.hpp"
+#include "nn/onnx_net.hpp"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -18,7 +18,7 @@
 #include <span>
 #include <string>
 
-namespace facetrack::cnn {
+namespace facetrack::nn {
 
 class PatchNet {
 public:
@@ -29,7 +29,7 @@ public:
 
     /// The values per patch.
     int outputCount() const { return outputs_; }
-    /// What runs the net (core::OnnxNet::engineName).
+    /// What runs the net (nn::OnnxNet::engineName).
     const char* engineName() const { return net_.engineName(); }
 
     /// The outputs for `patch` (CV_8U, patchSize x patchSize), for a net of
@@ -40,10 +40,10 @@ public:
     const Eigen::VectorXd& predict(std::span<const cv::Mat> patches);
 
 private:
-    core::OnnxNet net_;
+    nn::OnnxNet net_;
     int size_;
     int outputs_;
     Eigen::VectorXd output_;  ///< batch x outputs_
 };
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::nn

@@ -18,14 +18,12 @@
 #include <map>
 #include <string>
 
-namespace facetrack::fit {
-
-struct FitBasis;
+namespace facetrack::model {
 
 struct LandmarkConvention {
     /// Per landmark, in the fit basis's frontal frame (cm), like FitBasis::neutral.
-    Eigen::Matrix<double, 3, model::kLandmarkCount> offsets_frontal_cm =
-        Eigen::Matrix<double, 3, model::kLandmarkCount>::Zero();
+    Eigen::Matrix<double, 3, kLandmarkCount> offsets_frontal_cm =
+        Eigen::Matrix<double, 3, kLandmarkCount>::Zero();
     /// Native expression name -> f_j; a fitted expression not listed keeps 1.
     std::map<std::string, double> expression_prior;
 };
@@ -38,8 +36,4 @@ void writeLandmarkConvention(const std::string& path, const LandmarkConvention& 
 /// (offsets not finite or over 3 cm, prior factors not finite and positive).
 LandmarkConvention readLandmarkConvention(const std::string& path);
 
-/// Moves the basis's landmark slots by the convention's offsets and sets its
-/// expression prior (names from `data`).
-void applyConvention(FitBasis& basis, const LandmarkConvention& convention, const model::FaceModelData& data);
-
-}  // namespace facetrack::fit
+}  // namespace facetrack::model

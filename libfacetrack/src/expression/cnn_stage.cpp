@@ -1,8 +1,9 @@
-#include "cnn/cnn_stage.hpp"
+#include "expression/cnn_stage.hpp"
 
-#include "cnn/cnn_model_data.hpp"
-#include "cnn/landmark_net.hpp"
-#include "cnn/update_net.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
 #include "landmarks/lbf.hpp"
@@ -10,7 +11,7 @@
 #include <algorithm>
 #include <optional>
 
-namespace facetrack::cnn {
+namespace facetrack::expression {
 
 namespace {
 
@@ -24,16 +25,10 @@ struct CnnFaceState final : pipeline::StageState {
 
 class CnnStage final : public pipeline::Stage {
 public:
-    CnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face, const std::vector<int>& fitExpressions)
+    CnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face)
         : cascade_(std::move(cascade)), face_(std::move(face)) {
-        const CnnModelData& d = cascade_->data();
-        layout_ = makeWarpLayout(face_->data(), expressionIndices(face_->expressionNames(), d.expressions), d.patch_size);
-        for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
-            const int e = layout_.anchors.expressions[k];
-            const bool fitted = std::find(fitExpressions.begin(), fitExpressions.end(), e) != fitExpressions.end();
-            const bool read = d.reported.empty() || d.reported[k];
-            if (!d.expressions_only || (read && (!fitted || d.corrects_fit))) reported_.push_back({static_cast<int>(k), !fitted});
-        }
+        const nn::CnnModelData& d = model::dataOf(*cascade_);
+        layout_ = makeWarpLayout(model::dataOf(*face_), nn::expressionIndices(face_->expressionNames(), d.expressions), d.patch_size);
         if (d.mirror_averaged) mirror_ = updateMirror(d.expressions);
         for (std::size_t i = 0; i < d.stages.size(); ++i) {
             nets_.emplace_back(d.stages[i].onnx, d.patch_size, 6 + static_cast<int>(d.expressions.size()),
@@ -53,7 +48,7 @@ public:
         }
         return {"cnn", true,
                 std::string(cascade_->expressionsOnly() ? "expressions only (" + std::to_string(reported_.size()) +
-                                (cascade_->data().corrects_fit ? ", the fit's corrected" : " beside the fit's") + "), " : "") +
+                                (model::dataOf(*cascade_).corrects_fit ? ", the fit's corrected" : " beside the fit's") + "), " : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
                     std::to_string(layout_.anchors.expressions.size()) + " expressions" + (mirror_ ? ", mirror-averaged" : "") +
                     (landmark_net_ ? ", landmark net" : "") +
@@ -68,16 +63,33 @@ public:
         return s;
     }
 
-    std::vector<int> estimatedExpressions() const override {
-        std::vector<int> out;
-        for (const Reported& r : reported_) out.push_back(layout_.anchors.expressions[static_cast<std::size_t>(r.position)]);
-        return out;
+    pipeline::Contract contract() const override {
+        using pipeline::Field;
+        pipeline::Contract c{Field::Pose | Field::Expression | Field::Identity, Field::Expression};
+        if (!cascade_->expressionsOnly()) c.writes = c.writes | Field::Pose;
+        if (landmark_net_) c.writes = c.writes | Field::Landmarks;
+        for (const Reported& r : reported_) c.expressions.push_back(layout_.anchors.expressions[static_cast<std::size_t>(r.position)]);
+        return c;
     }
 
-    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+    /// The expressions an earlier stage estimates (the fit's) are the ones an
+    /// expressions-only cascade leaves alone, or corrects.
+    void connect(const pipeline::Upstream& upstream) override {
+        const nn::CnnModelData& d = model::dataOf(*cascade_);
+        reported_.clear();
+        for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
+            const int e = layout_.anchors.expressions[k];
+            const bool fitted = std::find(upstream.expressions.begin(), upstream.expressions.end(), e) != upstream.expressions.end();
+            const bool read = d.reported.empty() || d.reported[k];
+            if (!d.expressions_only || (read && (!fitted || d.corrects_fit))) reported_.push_back({static_cast<int>(k), !fitted});
+        }
+    }
+
+    pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        using pipeline::Outcome;
         auto& s = static_cast<CnnFaceState&>(*state);
         FaceResult& r = face.result;
-        if (!r.pose || !r.expression) return true;  // nothing fitted to refine
+        if (!r.pose || !r.expression) return Outcome::Ok;  // nothing fitted to refine
         if (!s.shaped || s.identity != r.identity) {
             s.identity = r.identity;
             Eigen::VectorXd a = Eigen::VectorXd::Zero(layout_.anchors.identityCount());
@@ -87,15 +99,15 @@ public:
             s.shaped = true;
         }
         readParams(*r.pose, r.expression->native, layout_.anchors.expressions, s.params);
-        const auto& stages = cascade_->data().stages;
+        const auto& stages = model::dataOf(*cascade_).stages;
         for (std::size_t i = 0; i < nets_.size(); ++i) {
             if (!refine(layout_, nets_[i], frame.gray, frame.camera, s.params, stages[i].rounds, s.work, mirror_ ? &*mirror_ : nullptr)) {
-                return true;  // keep the fit's answer
+                return Outcome::Ok;  // keep the fit's answer
             }
         }
         if (!cascade_->expressionsOnly()) r.pose = fit::headPoseOf(s.params);
         std::vector<float>& native = r.expression->native;
-        const std::vector<float>& neutral = cascade_->data().neutral;
+        const std::vector<float>& neutral = model::dataOf(*cascade_).neutral;
         for (const auto& [k, neutralised] : reported_) {
             float w = static_cast<float>(s.params.expression[k]);
             if (!neutral.empty() && neutralised) {
@@ -105,7 +117,7 @@ public:
         }
         r.expression->arkit = face_->toArkit(native);
         if (landmark_net_) moveLandmarks(frame, face, s);
-        return true;
+        return Outcome::Ok;
     }
 
 private:
@@ -127,9 +139,9 @@ private:
     std::shared_ptr<const CnnModel> cascade_;
     std::shared_ptr<const FaceModel> face_;
     WarpLayout layout_;
-    std::vector<PatchNet> nets_;
+    std::vector<nn::PatchNet> nets_;
     fit::FitBasis landmark_basis_;
-    std::optional<PatchNet> landmark_net_;
+    std::optional<nn::PatchNet> landmark_net_;
     std::optional<UpdateMirror> mirror_;
     struct Reported {
         int position;      ///< in the layout's expressions
@@ -140,15 +152,13 @@ private:
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face,
-                                              const pipeline::Stage* fit) {
+std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> cascade, std::shared_ptr<const FaceModel> face) {
     if (!cascade) {
         return pipeline::notAvailable("cnn",
                                       "no CNN file given (Models::loadDefault() reads " + CnnModel::defaultPath() + " when it exists)");
     }
-    if (!fit || !fit->info().available) return pipeline::notAvailable("cnn", "needs the fit stage's pose and expressions");
     if (!cascade->hasCascade()) return pipeline::notAvailable("cnn", "'" + cascade->sourcePath() + "' has no cascade stages");
-    return std::make_unique<CnnStage>(std::move(cascade), std::move(face), fit->estimatedExpressions());
+    return std::make_unique<CnnStage>(std::move(cascade), std::move(face));
 }
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::expression

@@ -1,4 +1,4 @@
-#include "cnn/face_warp.hpp"
+#include "expression/face_warp.hpp"
 
 #include "facetrack/error.hpp"
 #include "fit/face_fitter.hpp"
@@ -11,7 +11,7 @@
 #include <cmath>
 #include <limits>
 
-namespace facetrack::cnn {
+namespace facetrack::expression {
 
 namespace {
 
@@ -116,7 +116,7 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
     return layout;
 }
 
-Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd& identity, const fit::Camera& camera,
+Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd& identity, const core::Camera& camera,
                                 const fit::FaceParams& params) {
     const Eigen::Matrix3Xd base =
         fit::shapeWithIdentity(layout.anchors, identity.size() == layout.anchors.identityCount() ? identity : Eigen::VectorXd());
@@ -126,7 +126,7 @@ Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd&
     return out;
 }
 
-void projectAnchors(const WarpLayout& layout, const Eigen::Matrix3Xd& identityShape, const fit::Camera& camera,
+void projectAnchors(const WarpLayout& layout, const Eigen::Matrix3Xd& identityShape, const core::Camera& camera,
                     const fit::FaceParams& params, Eigen::Matrix3Xd& work, Eigen::Matrix2Xd& out) {
     fit::slotPositions(layout.anchors, identityShape, params.expression, work);
     const Eigen::Matrix3d rotation = fit::rotationOf(params.omega());
@@ -171,4 +171,4 @@ void warpFace(const WarpLayout& layout, const cv::Mat& frame, const Eigen::Matri
     }
 }
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::expression

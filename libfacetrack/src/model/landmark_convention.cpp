@@ -1,11 +1,10 @@
-#include "fit/landmark_convention.hpp"
+#include "model/landmark_convention.hpp"
 
 #include "core/binary_io.hpp"
-#include "fit/fit_basis.hpp"
 
 #include <cmath>
 
-namespace facetrack::fit {
+namespace facetrack::model {
 
 namespace {
 void validate(const LandmarkConvention& c, const std::string& what) {
@@ -19,7 +18,7 @@ void validate(const LandmarkConvention& c, const std::string& what) {
 void writeLandmarkConvention(const std::string& path, const LandmarkConvention& c) {
     validate(c, "landmark convention for '" + path + "'");
     core::BinaryWriter w;
-    w.put<std::uint32_t>(model::kLandmarkCount);
+    w.put<std::uint32_t>(kLandmarkCount);
     w.putArray(c.offsets_frontal_cm.data(), static_cast<std::size_t>(c.offsets_frontal_cm.size()));
     w.put<std::uint32_t>(static_cast<std::uint32_t>(c.expression_prior.size()));
     for (const auto& [name, factor] : c.expression_prior) {
@@ -33,7 +32,7 @@ LandmarkConvention readLandmarkConvention(const std::string& path) {
     const std::string what = "landmark convention '" + path + "'";
     const std::string payload = core::readModelFile(path, kConventionMagic, kConventionVersion, "landmark convention");
     core::BinaryReader r(payload, what);
-    if (r.get<std::uint32_t>() != model::kLandmarkCount) r.fail("landmark count");
+    if (r.get<std::uint32_t>() != kLandmarkCount) r.fail("landmark count");
     LandmarkConvention c;
     r.getArray(c.offsets_frontal_cm.data(), static_cast<std::size_t>(c.offsets_frontal_cm.size()));
     const auto priors = r.get<std::uint32_t>();
@@ -47,15 +46,4 @@ LandmarkConvention readLandmarkConvention(const std::string& path) {
     return c;
 }
 
-void applyConvention(FitBasis& basis, const LandmarkConvention& c, const model::FaceModelData& data) {
-    for (int i = 0; i < model::kLandmarkCount; ++i)
-        basis.neutral.col(basis.landmark_slots[static_cast<std::size_t>(i)]) += c.offsets_frontal_cm.col(i);
-    const auto names = basis.expressionNames(data);
-    basis.expression_prior = Eigen::VectorXd::Ones(basis.expressionCount());
-    for (std::size_t k = 0; k < names.size(); ++k) {
-        const auto it = c.expression_prior.find(names[k]);
-        if (it != c.expression_prior.end()) basis.expression_prior[static_cast<Eigen::Index>(k)] = it->second;
-    }
-}
-
-}  // namespace facetrack::fit
+}  // namespace facetrack::model

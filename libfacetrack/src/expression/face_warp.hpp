@@ -9,7 +9,7 @@
 // (a piecewise affine warp); a ring point's frame position is the least-squares
 // affine map of the anchors, canonical -> frame, applied to it.
 
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 #include "fit/fit_basis.hpp"
 #include "fit/pose.hpp"
 #include "model/face_model_data.hpp"
@@ -21,7 +21,7 @@
 #include <array>
 #include <vector>
 
-namespace facetrack::cnn {
+namespace facetrack::expression {
 
 struct WarpLayout {
     int size = 0;                              ///< the patch is size x size pixels
@@ -49,11 +49,11 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
 
 /// The anchors' frame positions (2 x anchors, pixels) for identity a (empty:
 /// the mean face) and params (expression in `expressions` order, or empty).
-Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd& identity, const fit::Camera& camera,
+Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd& identity, const core::Camera& camera,
                                 const fit::FaceParams& params);
 /// The same from the anchors' identity shape (fit::shapeWithIdentity of
 /// layout.anchors), into `out` through `work`: no allocation once they are sized.
-void projectAnchors(const WarpLayout& layout, const Eigen::Matrix3Xd& identityShape, const fit::Camera& camera,
+void projectAnchors(const WarpLayout& layout, const Eigen::Matrix3Xd& identityShape, const core::Camera& camera,
                     const fit::FaceParams& params, Eigen::Matrix3Xd& work, Eigen::Matrix2Xd& out);
 
 /// Warps the grey frame into `patch` (CV_8U, size x size; bilinear, edge
@@ -61,4 +61,4 @@ void projectAnchors(const WarpLayout& layout, const Eigen::Matrix3Xd& identitySh
 /// 8-bit grey or `anchors` has the wrong size. No allocation once `patch` is sized.
 void warpFace(const WarpLayout& layout, const cv::Mat& frame, const Eigen::Matrix2Xd& anchors, cv::Mat& patch);
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::expression

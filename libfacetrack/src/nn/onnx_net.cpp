@@ -1,4 +1,4 @@
-#include "core/onnx_net.hpp"
+#include "nn/onnx_net.hpp"
 
 #include "core/environment.hpp"
 #include "facetrack/error.hpp"
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace facetrack::core {
+namespace facetrack::nn {
 
 namespace {
 
@@ -36,7 +36,7 @@ double chainDiscrepancy(cv::dnn::Net& net, ConvChain& chain, cv::Mat& input) {
 
 }  // namespace
 
-OnnxNet::Engine OnnxNet::defaultEngine() { return getEnv("FACETRACK_NET_ENGINE") == "opencv" ? Engine::OpenCvDnn : Engine::Own; }
+OnnxNet::Engine OnnxNet::defaultEngine() { return core::getEnv("FACETRACK_NET_ENGINE") == "opencv" ? Engine::OpenCvDnn : Engine::Own; }
 
 OnnxNet::OnnxNet(const std::string& onnx, std::array<int, 4> shape, int outputs, const std::string& what, Engine engine) {
     try {
@@ -75,7 +75,7 @@ OnnxNet::OnnxNet(const std::string& onnx, std::array<int, 4> shape, int outputs,
         }
         whyNot = "its outputs differ from dnn's by " + std::to_string(discrepancy) + " of their scale";
     }
-    log(what + " runs with OpenCV's dnn: " + whyNot);
+    core::log(what + " runs with OpenCV's dnn: " + whyNot);
 }
 
 const float* OnnxNet::forward() {
@@ -88,4 +88,4 @@ const float* OnnxNet::forward() {
     return outputs_[0].ptr<float>();
 }
 
-}  // namespace facetrack::core
+}  // namespace facetrack::nn

@@ -12,10 +12,10 @@
 // Turning about the centre rather than the model origin (behind the face)
 // keeps a turn from looking like a shift.
 
-#include "cnn/face_warp.hpp"
-#include "cnn/patch_net.hpp"
+#include "expression/face_warp.hpp"
+#include "nn/patch_net.hpp"
 
-namespace facetrack::cnn {
+namespace facetrack::expression {
 
 /// A tracked face's public pose and native weights as the cascade's parameters: `expressions`
 /// (indices into the native weights, the layout's order; one missing from `native` reads 0).
@@ -59,7 +59,7 @@ struct RefineWork {
 /// then read as mirror images of each other, whatever asymmetry the net learned.
 /// False (params then meaningless) when the face left the space in front of the
 /// camera or a value stopped being finite.
-bool refine(const WarpLayout& layout, PatchNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
+bool refine(const WarpLayout& layout, nn::PatchNet& net, const cv::Mat& grey, const core::Camera& camera, fit::FaceParams& params,
             int rounds, RefineWork& work, const UpdateMirror* mirror = nullptr);
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::expression

@@ -1,4 +1,4 @@
-#include "core/conv_chain.hpp"
+#include "nn/conv_chain.hpp"
 
 #include <opencv2/dnn/all_layers.hpp>
 
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstring>
 
-namespace facetrack::core {
+namespace facetrack::nn {
 
 namespace {
 
@@ -398,4 +398,4 @@ void ConvChain::forward(const float* in, float* out) {
 
 void ConvChain::forwardPortable(const float* in, float* out) { runChainGeneric(layers_, in, out); }
 
-}  // namespace facetrack::core
+}  // namespace facetrack::nn

@@ -11,11 +11,11 @@
 // in patch pixels, and the landmarks are q_i = p_i + L d_i. In patch pixels a
 // displacement does not depend on the face's place, size or roll in the frame.
 
-#include "cnn/face_warp.hpp"
+#include "expression/face_warp.hpp"
 #include "facetrack/face_model.hpp"
 #include "fit/face_fitter.hpp"
 
-namespace facetrack::cnn {
+namespace facetrack::expression {
 
 constexpr int kLandmarkOutputs = 2 * model::kLandmarkCount;
 
@@ -29,7 +29,7 @@ Eigen::Matrix2d patchToFrame(const WarpLayout& layout, const Eigen::Matrix2Xd& a
 /// p above: the landmarks `params` (expressions in the basis's order) project
 /// to, from the basis's identity shape (fit::shapeWithIdentity), through
 /// `slots`: no allocation once it is sized.
-fit::Landmarks2d projectedLandmarks(const fit::FitBasis& basis, const Eigen::Matrix3Xd& identityShape, const fit::Camera& camera,
+fit::Landmarks2d projectedLandmarks(const fit::FitBasis& basis, const Eigen::Matrix3Xd& identityShape, const core::Camera& camera,
                                     const fit::FaceParams& params, Eigen::Matrix3Xd& slots);
 
 /// d above for landmarks q (what a net is trained on).
@@ -38,4 +38,4 @@ Eigen::VectorXd displacementsOf(const Eigen::Matrix2d& patchToFrame, const fit::
 /// q above from the net's outputs d.
 fit::Landmarks2d displaced(const Eigen::Matrix2d& patchToFrame, const fit::Landmarks2d& projected, const Eigen::VectorXd& d);
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::expression

@@ -1,14 +1,15 @@
 #include "facetrack/cnn_model.hpp"
 
-#include "cnn/cnn_model_data.hpp"
+#include "nn/cnn_model_data.hpp"
 #include "core/binary_io.hpp"
+#include "model/internals.hpp"
 #include "facetrack/version.hpp"
 
 #include <algorithm>
 
 namespace facetrack {
 
-namespace cnn {
+namespace nn {
 
 namespace {
 constexpr int kMaxStages = 8, kMaxRounds = 8;
@@ -168,20 +169,20 @@ CnnModelData readCnnModel(const std::string& path) {
     return m;
 }
 
-}  // namespace cnn
+}  // namespace nn
 
-CnnModel::CnnModel(std::shared_ptr<const cnn::CnnModelData> data, std::string source)
+CnnModel::CnnModel(std::shared_ptr<const nn::CnnModelData> data, std::string source)
     : data_(std::move(data)), source_(std::move(source)) {
     if (!data_) throw Error("CnnModel: null model data");
 }
 
 std::shared_ptr<const CnnModel> CnnModel::load(const std::string& path) {
-    return std::make_shared<const CnnModel>(std::make_shared<const cnn::CnnModelData>(cnn::readCnnModel(path)), path);
+    return model::Internals::make(nn::readCnnModel(path), path);
 }
 
 std::string CnnModel::defaultPath() { return modelDirectory() + "/cnn_cascade.ftm"; }
 
-std::uint32_t CnnModel::formatVersion() { return cnn::kCnnModelVersion; }
+std::uint32_t CnnModel::formatVersion() { return nn::kCnnModelVersion; }
 
 const std::string& CnnModel::sourcePath() const { return source_; }
 

@@ -1,14 +1,15 @@
-#include "cnn/refine_stage.hpp"
+#include "refine/refine_stage.hpp"
 
-#include "cnn/cnn_model_data.hpp"
-#include "cnn/landmark_refiner.hpp"
-#include "cnn/patch_net.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "refine/landmark_refiner.hpp"
+#include "nn/patch_net.hpp"
 #include "landmarks/lbf.hpp"
 
 #include <array>
 #include <optional>
 
-namespace facetrack::cnn {
+namespace facetrack::refine {
 
 namespace {
 
@@ -24,11 +25,11 @@ class RefineStage final : public pipeline::Stage {
 public:
     explicit RefineStage(std::shared_ptr<const CnnModel> model)
         : model_(std::move(model)),
-          layout_(makeRefinerLayout(model_->data())),
-          net_(model_->data().refiner_net, layout_.size, 2 * landmarks::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {
-        if (!model_->data().side_net.empty()) {
-            side_layout_ = makeSideLayout(model_->data());
-            side_net_.emplace(model_->data().side_net, side_layout_.size, 2 * static_cast<int>(kRightSide.size()),
+          layout_(makeRefinerLayout(model::dataOf(*model_))),
+          net_(model::dataOf(*model_).refiner_net, layout_.size, 2 * landmarks::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {
+        if (!model::dataOf(*model_).side_net.empty()) {
+            side_layout_ = makeSideLayout(model::dataOf(*model_));
+            side_net_.emplace(model::dataOf(*model_).side_net, side_layout_.size, 2 * static_cast<int>(kRightSide.size()),
                               "brow and eye refiner '" + model_->sourcePath() + "'", 2);
         }
     }
@@ -46,8 +47,10 @@ public:
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<RefineFaceState>(); }
 
-    bool run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
-        if (!face.result.landmarks) return true;
+    pipeline::Contract contract() const override { return {pipeline::Field::Landmarks, pipeline::Field::Landmarks}; }
+
+    pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
+        if (!face.result.landmarks) return pipeline::Outcome::Ok;
         const landmarks::Shape68 lbf = landmarks::fromLandmarks68(*face.result.landmarks);
         float& trust = static_cast<RefineFaceState&>(*state).trust;
         const float previous = trust;
@@ -65,23 +68,22 @@ public:
         if (side_net_ && refined.allFinite()) refineSides(side_layout_, *side_net_, frame.gray, side_patches_, refined);
         face.result.landmarks = landmarks::toLandmarks68(refined);
         face.locate(landmarks::boundsOf(refined));
-        return true;
+        return pipeline::Outcome::Ok;
     }
 
 private:
     std::shared_ptr<const CnnModel> model_;
     RefinerLayout layout_;
-    PatchNet net_;
+    nn::PatchNet net_;
     SideLayout side_layout_;
-    std::optional<PatchNet> side_net_;  ///< the brow and eye refiner, if the file has one
+    std::optional<nn::PatchNet> side_net_;  ///< the brow and eye refiner, if the file has one
     cv::Mat patch_;
     std::array<cv::Mat, 2> side_patches_;  // each its own size: reused, never reallocated
 };
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model, const pipeline::Stage* landmarks) {
-    if (!landmarks || !landmarks->info().available) return pipeline::notAvailable("refine", "needs the landmarks stage's landmarks");
+std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model) {
     if (!model) {
         return pipeline::notAvailable("refine",
                                       "no CNN file given (Models::loadDefault() reads " + CnnModel::defaultPath() + " when it exists)");
@@ -90,4 +92,4 @@ std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel>
     return std::make_unique<RefineStage>(std::move(model));
 }
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::refine

@@ -1,4 +1,4 @@
-#include "fit/camera.hpp"
+#include "core/camera.hpp"
 
 #include "core/math.hpp"
 
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <string>
 
-namespace facetrack::fit {
+namespace facetrack::core {
 
 Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx, double principalX, double principalY) {
     if (width <= 0 || height <= 0) throw Error("camera: the frame has no pixels");
@@ -32,4 +32,4 @@ Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx,
     return c;
 }
 
-}  // namespace facetrack::fit
+}  // namespace facetrack::core

@@ -3,7 +3,7 @@
 
 #include <Eigen/Core>
 
-namespace facetrack::fit {
+namespace facetrack::core {
 
 /// u = fx X/Z + cx, v = fy Y/Z + cy, in the camera frame of result.hpp.
 struct Camera {
@@ -24,4 +24,4 @@ struct Camera {
 Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx, double principalX = -1.0,
                  double principalY = -1.0);
 
-}  // namespace facetrack::fit
+}  // namespace facetrack::core

@@ -1,12 +1,14 @@
-#include "cnn/landmark_net.hpp"
+#include "expression/landmark_net.hpp"
 
-#include "fit/landmark_convention.hpp"
+#include "model/internals.hpp"
 
-namespace facetrack::cnn {
+namespace facetrack::expression {
 
 fit::FitBasis landmarkBasis(const FaceModel& model, const std::vector<int>& expressions) {
-    fit::FitBasis basis = fit::buildFitBasis(model.data(), expressions);
-    if (!model.conventionPath().empty()) fit::applyConvention(basis, fit::readLandmarkConvention(model.conventionPath()), model.data());
+    fit::FitBasis basis = fit::buildFitBasis(model::dataOf(model), expressions);
+    if (const model::LandmarkConvention* convention = model::Internals::convention(model)) {
+        fit::applyConvention(basis, *convention, model::dataOf(model));
+    }
     return basis;
 }
 
@@ -15,7 +17,7 @@ Eigen::Matrix2d patchToFrame(const WarpLayout& layout, const Eigen::Matrix2Xd& a
     return affine.topRows<2>().transpose();
 }
 
-fit::Landmarks2d projectedLandmarks(const fit::FitBasis& basis, const Eigen::Matrix3Xd& identityShape, const fit::Camera& camera,
+fit::Landmarks2d projectedLandmarks(const fit::FitBasis& basis, const Eigen::Matrix3Xd& identityShape, const core::Camera& camera,
                                     const fit::FaceParams& params, Eigen::Matrix3Xd& slots) {
     fit::slotPositions(basis, identityShape, params.expression, slots);
     return fit::projectSlots(basis, slots, camera, params.pose, fit::silhouetteContourAt(basis, slots, camera, params.pose));
@@ -30,4 +32,4 @@ fit::Landmarks2d displaced(const Eigen::Matrix2d& patchToFrame, const fit::Landm
     return projected + patchToFrame * Eigen::Map<const fit::Landmarks2d>(d.data());
 }
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::expression

@@ -1,15 +1,15 @@
-#include "cnn/landmark_refiner.hpp"
+#include "refine/landmark_refiner.hpp"
 
-#include "cnn/patch_net.hpp"
+#include "nn/patch_net.hpp"
 #include "core/image.hpp"
 #include "facetrack/error.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace facetrack::cnn {
+namespace facetrack::refine {
 
-RefinerLayout makeRefinerLayout(const CnnModelData& data) {
+RefinerLayout makeRefinerLayout(const nn::CnnModelData& data) {
     if (data.refiner_mean.size() != 2 * landmarks::kLandmarks || data.refiner_share.size() != landmarks::kLandmarks) {
         throw Error("landmark refiner: needs a mean shape of 68 points and 68 shares");
     }
@@ -55,7 +55,7 @@ landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Sim
     return blendedLandmarks(layout, net, lbf, netTrust(layout, net, lbf));
 }
 
-SideLayout makeSideLayout(const CnnModelData& data) {
+SideLayout makeSideLayout(const nn::CnnModelData& data) {
     if (data.side_mean.size() != 22 || data.side_share.size() != 11) {
         throw Error("brow and eye refiner: needs a mean shape of 11 points and 11 shares");
     }
@@ -99,7 +99,7 @@ void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen
     }
 }
 
-void refineSides(const SideLayout& layout, PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape) {
+void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape) {
     const int width = gray.cols;
     std::array<cv::Matx23d, 2> toFrame;
     for (const int b : {0, 1}) {  // the right side, then the left mirrored
@@ -115,4 +115,4 @@ void refineSides(const SideLayout& layout, PatchNet& net, const cv::Mat& gray, s
     }
 }
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::refine

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace facetrack::cnn {
+namespace facetrack::nn {
 
 struct CnnStageData {
     int rounds = 1;    ///< how many times the stage runs, re-warping in between
@@ -70,4 +70,4 @@ std::vector<int> expressionIndices(const std::vector<std::string>& modelNames, c
 /// Throws Error naming the file when it is missing, truncated or corrupt.
 CnnModelData readCnnModel(const std::string& path);
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::nn

@@ -1,10 +1,10 @@
-#include "cnn/patch_net.hpp"
+#include "nn/patch_net.hpp"
 
 #include "facetrack/error.hpp"
 
 #include <algorithm>
 
-namespace facetrack::cnn {
+namespace facetrack::nn {
 
 PatchNet::PatchNet(const std::string& onnx, int patchSize, int outputs, const std::string& what, int batch)
     : net_(onnx, {batch, 1, patchSize, patchSize}, batch * outputs, what), size_(patchSize), outputs_(outputs), output_(batch * outputs) {}
@@ -29,4 +29,4 @@ const Eigen::VectorXd& PatchNet::predict(std::span<const cv::Mat> patches) {
     return output_;
 }
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::nn

@@ -1,11 +1,11 @@
-#include "filter/one_euro.hpp"
+#include "core/one_euro.hpp"
 
 #include "core/math.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace facetrack::filter {
+namespace facetrack::core {
 
 namespace {
 
@@ -44,4 +44,4 @@ double MotionSpeed::operator()(const Eigen::Vector2d& p, double dt, double scale
     return speed_.norm();
 }
 
-}  // namespace facetrack::filter
+}  // namespace facetrack::core

@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-namespace facetrack::filter {
+namespace facetrack::core {
 
 struct OneEuroSettings {
     double min_cutoff_hz = 1.0;   ///< f_min
@@ -58,4 +58,4 @@ private:
     Eigen::Vector2d last_ = Eigen::Vector2d::Zero(), speed_ = Eigen::Vector2d::Zero();
 };
 
-}  // namespace facetrack::filter
+}  // namespace facetrack::core

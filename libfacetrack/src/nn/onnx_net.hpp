@@ -10,7 +10,7 @@
 // OpenCV's dnn. FACETRACK_NET_ENGINE=opencv chooses dnn for every net, to
 // compare the two.
 
-#include "core/conv_chain.hpp"
+#include "nn/conv_chain.hpp"
 
 #include <opencv2/dnn.hpp>
 
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace facetrack::core {
+namespace facetrack::nn {
 
 class OnnxNet {
 public:
@@ -52,4 +52,4 @@ private:
     std::vector<float> chain_output_;
 };
 
-}  // namespace facetrack::core
+}  // namespace facetrack::nn

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-namespace facetrack::core {
+namespace facetrack::nn {
 
 class ConvChain {
 public:
@@ -82,4 +82,4 @@ private:
     bool avx2_ = false;
 };
 
-}  // namespace facetrack::core
+}  // namespace facetrack::nn

@@ -1,4 +1,4 @@
-#include "cnn/update_net.hpp"
+#include "expression/update_net.hpp"
 
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <array>
 
-namespace facetrack::cnn {
+namespace facetrack::expression {
 
 namespace {
 Eigen::Vector3d centreOf(const WarpLayout& layout, const fit::FaceParams& p) {
@@ -60,7 +60,7 @@ UpdateMirror updateMirror(const std::vector<std::string>& expressions) {
     return m;
 }
 
-bool refine(const WarpLayout& layout, PatchNet& net, const cv::Mat& grey, const fit::Camera& camera, fit::FaceParams& params,
+bool refine(const WarpLayout& layout, nn::PatchNet& net, const cv::Mat& grey, const core::Camera& camera, fit::FaceParams& params,
             int rounds, RefineWork& work, const UpdateMirror* mirror) {
     constexpr double kMinDepthCm = 1.0;
     for (int i = 0; i < rounds; ++i) {
@@ -85,4 +85,4 @@ bool refine(const WarpLayout& layout, PatchNet& net, const cv::Mat& grey, const 
     return params.pose.allFinite() && centreOf(layout, params).z() >= kMinDepthCm;
 }
 
-}  // namespace facetrack::cnn
+}  // namespace facetrack::expression

@@ -1,0 +1,20 @@
+#pragma once
+// The "refine" stage: the landmark refiner (landmark_refiner.hpp) moves the
+// landmarks stage's 68 landmarks, before the fit reads them.
+//
+// Reads and writes: landmarks (and locates the face at their box).
+// Never loses a face: the landmarks stage's checks decide that; a non-finite
+// answer keeps LBF's landmarks.
+
+#include "pipeline/stage.hpp"
+
+#include "facetrack/cnn_model.hpp"
+
+#include <memory>
+
+namespace facetrack::refine {
+
+/// `model` null or without a refiner (CnnModel::hasRefiner): the stage is not available.
+std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model);
+
+}  // namespace facetrack::refine
