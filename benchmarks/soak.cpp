@@ -91,7 +91,8 @@ int main(int argc, char** argv) {
             if (i % 1000 >= 500 && i % 1000 < 530) {
                 frame = cv::Mat::zeros(480, 640, CV_8UC3);  // the face leaves
             } else {
-                const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, static_cast<double>(pass % 7 - 3), 0, 1, static_cast<double>(pass % 5 - 2));
+                const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, static_cast<double>(pass % 7 - 3), 0, 1,
+                                       static_cast<double>(pass % 5 - 2));
                 cv::warpAffine(decoded, shifted, shift, decoded.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
                 shifted.convertTo(frame, -1, 1.0, static_cast<double>((pass * 37) % 41 - 20));
             }

@@ -55,7 +55,7 @@ void main() {
 // ICT-FaceKit's vertex regions (its regions.json), which the shipped model
 // keeps in order. Vertices past the eyeballs are see-through shells (tear
 // film, eye blend, occlusion, lashes) that would hide the eyes when drawn opaque.
-constexpr int kHeadEnd = 11248;        // face + head and neck: skin
+constexpr int kHeadEnd = 11248;  // face + head and neck: skin
 constexpr int kMouthSocketEnd = 13294;
 constexpr int kEyeSocketsEnd = 14062;
 constexpr int kGumsEnd = 17039;
@@ -74,8 +74,7 @@ AvatarState AvatarState::of(const FaceResult& face) {
     return state;
 }
 
-AvatarRenderer::AvatarRenderer(std::shared_ptr<const FaceModel> model)
-    : model_(std::move(model)), eyes_(EyeRig::both(*model_)) {
+AvatarRenderer::AvatarRenderer(std::shared_ptr<const FaceModel> model) : model_(std::move(model)), eyes_(EyeRig::both(*model_)) {
     const int n = model_->vertexCount();
     const auto left = model_->leftEyeball(), right = model_->rightEyeball();
     const int drawn_end = std::max(left.last_vertex, right.last_vertex) + 1;
@@ -164,8 +163,7 @@ void AvatarRenderer::draw(const AvatarState& state, int x, int y, int width, int
     drawMesh(mesh_, state.rotation, x, y, width, height, mirror);
 }
 
-void AvatarRenderer::drawMesh(const std::vector<Vec3>& mesh, const Quaternion& rotation, int x, int y, int width, int height,
-                              bool mirror) {
+void AvatarRenderer::drawMesh(const std::vector<Vec3>& mesh, const Quaternion& rotation, int x, int y, int width, int height, bool mirror) {
     if (mesh.size() != static_cast<std::size_t>(model_->vertexCount())) throw Error("AvatarRenderer: the mesh is not the model's");
     const std::size_t n = mesh.size();
 

@@ -25,7 +25,7 @@ struct AvatarState {
     /// Camera frame, as HeadPose::rotation; the default faces the camera
     /// (model +y up turns to image up, +z out of the face towards the camera).
     Quaternion rotation{0.f, 1.f, 0.f, 0.f};
-    std::optional<GazeResult> gaze; ///< camera-frame directions; none: eyes at rest
+    std::optional<GazeResult> gaze;  ///< camera-frame directions; none: eyes at rest
 
     static AvatarState of(const FaceResult& face);
 };
@@ -54,9 +54,9 @@ private:
     glm::vec3 pivot_{0.f};                // the head turns about this model-frame point
     float view_distance_ = 0.f;           // mm, to frame the head
     GLuint program_ = 0, vao_ = 0, geometry_vbo_ = 0, colour_vbo_ = 0, ebo_ = 0;
-    std::vector<float> geometry_;      // per vertex: position xyz, normal xyz (reused)
-    std::vector<glm::vec3> normals_;   // per vertex, accumulated per frame (reused)
-    std::vector<Vec3> mesh_;           // the posed mesh (reused)
+    std::vector<float> geometry_;     // per vertex: position xyz, normal xyz (reused)
+    std::vector<glm::vec3> normals_;  // per vertex, accumulated per frame (reused)
+    std::vector<Vec3> mesh_;          // the posed mesh (reused)
 };
 
 }  // namespace facetrack::demo

@@ -21,8 +21,8 @@ cv::Mat hudImage(const std::vector<std::string>& lines, int maxWidth) {
     cv::Mat hud(kLine * static_cast<int>(lines.size()) + 2 * kMargin, std::min(maxWidth, width + 2 * kMargin), CV_8UC4,
                 cv::Scalar(20, 20, 20, 170));
     for (std::size_t i = 0; i < lines.size(); ++i) {
-        cv::putText(hud, lines[i], cv::Point(kMargin, kMargin + kLine * static_cast<int>(i + 1) - 5), cv::FONT_HERSHEY_SIMPLEX,
-                    kScale, cv::Scalar(235, 235, 235, 255), 1, cv::LINE_AA);
+        cv::putText(hud, lines[i], cv::Point(kMargin, kMargin + kLine * static_cast<int>(i + 1) - 5), cv::FONT_HERSHEY_SIMPLEX, kScale,
+                    cv::Scalar(235, 235, 235, 255), 1, cv::LINE_AA);
     }
     return hud;
 }
@@ -76,9 +76,8 @@ void DemoView::draw(const cv::Mat& frameBgr, const FrameResult& result, const Hu
         const auto& face = result.faces.front();
         const Vec3 e = face.pose->euler_deg;
         char pose[128];
-        std::snprintf(pose, sizeof pose, "id %d  pitch %+.0f  yaw %+.0f  roll %+.0f  distance %.0f cm  %s", face.id, e.x, e.y,
-                      e.z, face.pose->translation_mm.z / 10.f,
-                      face.identity_calibrated ? "identity calibrated" : "calibrating identity...");
+        std::snprintf(pose, sizeof pose, "id %d  pitch %+.0f  yaw %+.0f  roll %+.0f  distance %.0f cm  %s", face.id, e.x, e.y, e.z,
+                      face.pose->translation_mm.z / 10.f, face.identity_calibrated ? "identity calibrated" : "calibrating identity...");
         lines.push_back(pose);
     }
     lines.insert(lines.end(), hud.notes.begin(), hud.notes.end());

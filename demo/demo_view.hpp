@@ -20,9 +20,9 @@
 namespace facetrack::demo {
 
 struct Hud {
-    double fps = 0.0;                 ///< frames tracked per second, smoothed
-    std::vector<StageTiming> timings; ///< the tracker's, plus the demo's own (render)
-    std::vector<std::string> notes;   ///< state lines: source, paused, calibration, problems
+    double fps = 0.0;                  ///< frames tracked per second, smoothed
+    std::vector<StageTiming> timings;  ///< the tracker's, plus the demo's own (render)
+    std::vector<std::string> notes;    ///< state lines: source, paused, calibration, problems
 };
 
 class DemoView {

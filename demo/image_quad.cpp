@@ -53,8 +53,8 @@ void ImageQuad::draw(const cv::Mat& image, int x, int y, int width, int height, 
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(image.step / image.elemSize()));
     // Uploaded as RGB(A) and swizzled in the shader: the bytes are BGR(A).
-    glTexImage2D(GL_TEXTURE_2D, 0, alpha ? GL_RGBA8 : GL_RGB8, image.cols, image.rows, 0, alpha ? GL_RGBA : GL_RGB,
-                 GL_UNSIGNED_BYTE, image.data);
+    glTexImage2D(GL_TEXTURE_2D, 0, alpha ? GL_RGBA8 : GL_RGB8, image.cols, image.rows, 0, alpha ? GL_RGBA : GL_RGB, GL_UNSIGNED_BYTE,
+                 image.data);
     glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
     glViewport(x, y, width, height);
     if (alpha) {

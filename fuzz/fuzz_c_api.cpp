@@ -79,7 +79,8 @@ T* allocate(std::uint32_t size) {
 }
 
 std::uint32_t claimedSize(std::size_t own, std::int16_t offset) {
-    return static_cast<std::uint32_t>(std::clamp<std::int64_t>(static_cast<std::int64_t>(own) + offset, 0, 4 * static_cast<std::int64_t>(own)));
+    return static_cast<std::uint32_t>(
+        std::clamp<std::int64_t>(static_cast<std::int64_t>(own) + offset, 0, 4 * static_cast<std::int64_t>(own)));
 }
 
 /// ft_tracker_process with the header's arguments; the frames' faces are then read back.
@@ -98,7 +99,8 @@ void process(ft_tracker* t, const std::uint8_t* header, const std::uint8_t* pixe
         const std::int64_t rows = held < row ? 0 : 1 + (held - row) / stride;
         height = static_cast<std::int32_t>(std::min<std::int64_t>(requestedHeight, rows));
     }
-    ft_frame_result* result = (flags & 2) ? nullptr : allocate<ft_frame_result>(claimedSize(sizeof(ft_frame_result), read<std::int16_t>(header + 2)));
+    ft_frame_result* result = (flags & 2) ? nullptr
+                                          : allocate<ft_frame_result>(claimedSize(sizeof(ft_frame_result), read<std::int16_t>(header + 2)));
     const ft_status s = ft_tracker_process((flags & 1) ? nullptr : t, (flags & 4) ? nullptr : pixels, width, height, stride, format,
                                            read<double>(header + 16), result);
     requireStatus(s);
@@ -157,25 +159,38 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::size_t available = size - kHeader;
     ft_tracker* t = (data[1] & 1) ? nullptr : tracker();
     switch (data[0] % 8) {
-        case 0: process(tracker(), data, pixels, available); break;
+        case 0:
+            process(tracker(), data, pixels, available);
+            break;
         case 1: {
             ft_face* face = (data[1] & 2) ? nullptr : allocate<ft_face>(claimedSize(sizeof(ft_face), read<std::int16_t>(data + 2)));
             const ft_status s = ft_tracker_face(t, static_cast<std::int8_t>(data[15]), face);
             requireStatus(s);
-            if (s == FT_OK && face && face->struct_size >= sizeof(ft_face)) requireFinite(face->landmarks, 2 * FT_LANDMARK_COUNT, "a landmark that is not finite");
+            if (s == FT_OK && face && face->struct_size >= sizeof(ft_face))
+                requireFinite(face->landmarks, 2 * FT_LANDMARK_COUNT, "a landmark that is not finite");
             std::free(face);
             break;
         }
-        case 2: requireStatus(ft_tracker_reset(t)); break;
-        case 3: requireStatus(ft_tracker_reset_identity(t)); break;
-        case 4: requireStatus(ft_tracker_calibrate_neutral(t)); break;
-        case 5: requireStatus(ft_tracker_reset_neutral(t)); break;
+        case 2:
+            requireStatus(ft_tracker_reset(t));
+            break;
+        case 3:
+            requireStatus(ft_tracker_reset_identity(t));
+            break;
+        case 4:
+            requireStatus(ft_tracker_calibrate_neutral(t));
+            break;
+        case 5:
+            requireStatus(ft_tracker_reset_neutral(t));
+            break;
         case 6: {
             std::int32_t estimated[FT_ARKIT_COUNT];
             requireStatus(ft_tracker_estimated_shapes(t, (data[1] & 2) ? nullptr : estimated));
             break;
         }
-        default: createAndProcess(data, pixels, available); break;
+        default:
+            createAndProcess(data, pixels, available);
+            break;
     }
     const char* error = ft_tracker_last_error(t);
     require(error != nullptr, "ft_tracker_last_error gave NULL");

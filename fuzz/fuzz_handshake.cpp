@@ -14,8 +14,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const auto version = facetrack::send::parseIFacialMocapHandshake(datagram);
     if (version) {
         facetrack::fuzz::require(*version == 1 || *version == 2, "a handshake version other than 1 or 2");
-        facetrack::fuzz::require(datagram.substr(0, facetrack::send::kIFacialMocapHandshake.size()) == facetrack::send::kIFacialMocapHandshake,
-                                 "a version for a datagram that is not the handshake");
+        facetrack::fuzz::require(
+            datagram.substr(0, facetrack::send::kIFacialMocapHandshake.size()) == facetrack::send::kIFacialMocapHandshake,
+            "a version for a datagram that is not the handshake");
     }
     return 0;
 }

@@ -48,8 +48,8 @@ const Format kFormats[] = {
 constexpr int kFormatCount = sizeof kFormats / sizeof kFormats[0];
 
 const std::string& scratchPath() {
-    static const std::string path =
-        (std::filesystem::temp_directory_path() / ("facetrack_fuzz_" + std::to_string(::getpid()) + ".ftm")).string();
+    static const std::string path = (std::filesystem::temp_directory_path() / ("facetrack_fuzz_" + std::to_string(::getpid()) + ".ftm"))
+                                        .string();
     return path;
 }
 

@@ -85,7 +85,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     view.stride = padding == 255 ? (row > 0 ? row - 1 : 0) : row + padding;
     const std::size_t available = size - kHeader;
     // Rows the bytes hold: the last row needs only `row` bytes, not a whole stride.
-    const int rows = view.stride == 0 || available < row ? 0 : static_cast<int>(std::min<std::size_t>(1 + (available - row) / view.stride, 1024));
+    const int rows = view.stride == 0 || available < row
+                         ? 0
+                         : static_cast<int>(std::min<std::size_t>(1 + (available - row) / view.stride, 1024));
     view.height = std::min(requestedHeight, rows);
     if (view.height == 0) view.data = available > 0 ? view.data : nullptr;
 

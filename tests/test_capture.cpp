@@ -37,9 +37,8 @@ TEST(Capture, YuyvToBgrFollowsBt601IncludingRowPadding) {
     constexpr int w = 6, h = 3;
     constexpr std::size_t stride = 16;
     std::vector<std::uint8_t> yuyv(stride * h, 0xEE);
-    const int samples[][4] = {{16, 128, 235, 128},  {81, 90, 145, 240},   {41, 240, 210, 16},
-                              {126, 128, 126, 128}, {200, 60, 30, 200},   {170, 166, 106, 16},
-                              {60, 100, 180, 150},  {235, 128, 16, 128},  {128, 16, 128, 240}};
+    const int samples[][4] = {{16, 128, 235, 128}, {81, 90, 145, 240},  {41, 240, 210, 16},  {126, 128, 126, 128}, {200, 60, 30, 200},
+                              {170, 166, 106, 16}, {60, 100, 180, 150}, {235, 128, 16, 128}, {128, 16, 128, 240}};
     for (int r = 0; r < h; ++r) {
         for (int p = 0; p < w / 2; ++p) {
             const auto& s = samples[r * (w / 2) + p];
@@ -218,7 +217,8 @@ public:
                 size_ = 2 * pix.width * pix.height;
                 return 0;
             }
-            case VIDIOC_S_PARM: return 0;
+            case VIDIOC_S_PARM:
+                return 0;
             case VIDIOC_REQBUFS:
                 static_cast<v4l2_requestbuffers*>(arg)->count = 4;
                 buffers_.assign(4, std::vector<std::uint8_t>(size_));
@@ -229,9 +229,12 @@ public:
                 buf->m.offset = buf->index * static_cast<std::uint32_t>(size_);
                 return 0;
             }
-            case VIDIOC_QBUF: queued_.push_back(static_cast<v4l2_buffer*>(arg)->index); return 0;
+            case VIDIOC_QBUF:
+                queued_.push_back(static_cast<v4l2_buffer*>(arg)->index);
+                return 0;
             case VIDIOC_STREAMON:
-            case VIDIOC_STREAMOFF: return 0;
+            case VIDIOC_STREAMOFF:
+                return 0;
             case VIDIOC_DQBUF: {
                 if (queued_.empty()) return fail(EAGAIN);
                 auto* buf = static_cast<v4l2_buffer*>(arg);
@@ -242,7 +245,8 @@ public:
                 buf->bytesused = static_cast<std::uint32_t>(std::min(pending_.size(), memory.size()));
                 return 0;
             }
-            default: return fail(EINVAL);
+            default:
+                return fail(EINVAL);
         }
     }
 
@@ -318,8 +322,8 @@ TEST(CaptureStream, DropsCorruptMjpegFramesAndDeliversTheNextGoodOne) {
     std::vector<std::uint8_t> jpeg;
     ASSERT_TRUE(cv::imencode(".jpg", image, jpeg));
     std::vector<std::uint8_t> torn(jpeg.begin(), jpeg.begin() + jpeg.size() / 2);
-    fake->script = {{FakeCamera::Event::Frame, torn}, {FakeCamera::Event::Frame, std::vector<std::uint8_t>(500, 0)},
-                    {FakeCamera::Event::Frame, jpeg}};
+    fake->script = {
+        {FakeCamera::Event::Frame, torn}, {FakeCamera::Event::Frame, std::vector<std::uint8_t>(500, 0)}, {FakeCamera::Event::Frame, jpeg}};
     CameraCapture camera(fakeSettings(), fake);
     CapturedFrame frame;
     ASSERT_EQ(camera.read(frame), CaptureStatus::Frame);
@@ -352,9 +356,8 @@ TEST(CaptureStream, UnsupportedFormatsAndBusyDevicesSayWhatToDo) {
 
 TEST(CaptureStream, UnplugIsReportedAndReleasesTheDevice) {
     auto fake = std::make_shared<FakeCamera>();
-    fake->script = {{FakeCamera::Event::Frame, yuyvFrame(640, 480, 126, 128, 128)},
-                    {FakeCamera::Event::Silence, {}},
-                    {FakeCamera::Event::Unplug, {}}};
+    fake->script = {
+        {FakeCamera::Event::Frame, yuyvFrame(640, 480, 126, 128, 128)}, {FakeCamera::Event::Silence, {}}, {FakeCamera::Event::Unplug, {}}};
     CameraCapture camera(fakeSettings(), fake);
     CapturedFrame frame;
     EXPECT_EQ(camera.read(frame), CaptureStatus::Frame);

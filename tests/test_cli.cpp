@@ -142,9 +142,8 @@ TEST(Cli, TrackWritesAnOverlayVideoAndBenchWritesAPlot) {
 }
 
 TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
-    for (const std::string args : {"detect /nonexistent/face.jpg", "detect", "detect /etc/hostname",
-                                   "detect --detector magic x.jpg", "detect --bogus x.jpg", "frobnicate",
-                                   "track /nonexistent.mp4", "eval-detect /nonexistent"}) {
+    for (const std::string args : {"detect /nonexistent/face.jpg", "detect", "detect /etc/hostname", "detect --detector magic x.jpg",
+                                   "detect --bogus x.jpg", "frobnicate", "track /nonexistent.mp4", "eval-detect /nonexistent"}) {
         const CliRun run = runCli(args);
         EXPECT_NE(run.exit_code, 0) << args;
         EXPECT_NE(run.exit_code, -1) << args << ": crashed";
@@ -219,26 +218,28 @@ TEST_P(EveryOption, RefusesBadValuesBeforeOpeningAnything) {
             EXPECT_EQ(last.rfind(prefix, 0), 0u) << what << ": " << run.err;
             const bool outputPath = option == "--out" || option == "--overlay" || option == "--plot" || option == "--points-out";
             if (value == "nan" && !outputPath) {
-                EXPECT_EQ(run.err.find("/nonexistent"), std::string::npos) << what << ": the input was opened before the option was checked: " << run.err;
+                EXPECT_EQ(run.err.find("/nonexistent"), std::string::npos)
+                    << what << ": the input was opened before the option was checked: " << run.err;
             }
         }
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Cli, EveryOption,
-    testing::Values(CommandUnderTest{"info", ""}, CommandUnderTest{"detect", "/nonexistent/a.jpg"},
-                    CommandUnderTest{"landmarks", "/nonexistent/a.jpg"}, CommandUnderTest{"track", "/nonexistent/a.mp4"},
-                    CommandUnderTest{"bench", "/nonexistent/a.mp4"}, CommandUnderTest{"eval-detect", "/nonexistent/dir"},
-                    CommandUnderTest{"eval-landmarks", "/nonexistent/dir"}, CommandUnderTest{"eval-track", "/nonexistent/a.mp4"},
-                    CommandUnderTest{"eval-gaze", "--clips /nonexistent/a.mp4 --split none --synthetic 0"},
-                    CommandUnderTest{"eval-expressions", "/nonexistent/a.mp4"},
-                    CommandUnderTest{"send", "--input /nonexistent/a.mp4 --protocol vmc"}),
-    [](const testing::TestParamInfo<CommandUnderTest>& info) {
-        std::string name = info.param.name;
-        std::replace(name.begin(), name.end(), '-', '_');
-        return name;
-    });
+INSTANTIATE_TEST_SUITE_P(Cli, EveryOption,
+                         testing::Values(CommandUnderTest{"info", ""}, CommandUnderTest{"detect", "/nonexistent/a.jpg"},
+                                         CommandUnderTest{"landmarks", "/nonexistent/a.jpg"},
+                                         CommandUnderTest{"track", "/nonexistent/a.mp4"}, CommandUnderTest{"bench", "/nonexistent/a.mp4"},
+                                         CommandUnderTest{"eval-detect", "/nonexistent/dir"},
+                                         CommandUnderTest{"eval-landmarks", "/nonexistent/dir"},
+                                         CommandUnderTest{"eval-track", "/nonexistent/a.mp4"},
+                                         CommandUnderTest{"eval-gaze", "--clips /nonexistent/a.mp4 --split none --synthetic 0"},
+                                         CommandUnderTest{"eval-expressions", "/nonexistent/a.mp4"},
+                                         CommandUnderTest{"send", "--input /nonexistent/a.mp4 --protocol vmc"}),
+                         [](const testing::TestParamInfo<CommandUnderTest>& info) {
+                             std::string name = info.param.name;
+                             std::replace(name.begin(), name.end(), '-', '_');
+                             return name;
+                         });
 
 TEST(Cli, AnUnreadableImageIsAnErrorAndAFolderGoesOnPastOne) {
     FACETRACK_REQUIRE_SHARED();
@@ -303,7 +304,8 @@ TEST(Cli, EvalGazeSeparatesTheFitsErrorFromTheGeometrysOnRenders) {
     // In a folder of its own: eval-gaze writes the first renders where it runs.
     const std::string dir = test::tempPath("eval_gaze");
     std::filesystem::create_directories(dir);
-    const CliRun run = test::runCommand("cd '" + dir + "' && " + std::string(FACETRACK_CLI), "eval-gaze --clips '' --split none --synthetic 8");
+    const CliRun run = test::runCommand("cd '" + dir + "' && " + std::string(FACETRACK_CLI),
+                                        "eval-gaze --clips '' --split none --synthetic 8");
     ASSERT_EQ(run.exit_code, 0) << run.err;
     EXPECT_TRUE(std::filesystem::exists(dir + "/synthetic_gaze_0.png"));
     std::filesystem::remove_all(dir);

@@ -127,7 +127,9 @@ std::vector<NamedNet> projectNets() {
     if (std::filesystem::exists(eyes)) {
         const gaze::EyeModelData m = gaze::readEyeModel(eyes);
         if (!m.iris_net.empty())
-            nets.push_back({"the shipped iris net", m.iris_net, {2, 1, gaze::kPatchHeight, gaze::kPatchWidth},
+            nets.push_back({"the shipped iris net",
+                            m.iris_net,
+                            {2, 1, gaze::kPatchHeight, gaze::kPatchWidth},
                             2 * gaze::kPixelClasses * gaze::kIrisNetRows * gaze::kIrisNetColumns});
     }
     if (std::filesystem::exists(CnnModel::defaultPath())) {  // last: the nets above keep the inputs they were checked on
@@ -213,8 +215,8 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
     nn::CnnModelData correctingAll = m;  // a cascade that refines everything has no fit's shapes to correct apart
     correctingAll.corrects_fit = true;
     EXPECT_THROW(nn::writeCnnModel(test::tempPath("cascade_bad.ftm"), correctingAll), Error);
-    for (const auto& [neutral, reported] : {std::pair<std::vector<float>, std::vector<bool>>{{0.1f, 0.2f}, {}}, {{}, {true, false}},
-                                            {{1.f}, {}}, {{std::nanf("")}, {}}}) {
+    for (const auto& [neutral, reported] :
+         {std::pair<std::vector<float>, std::vector<bool>>{{0.1f, 0.2f}, {}}, {{}, {true, false}}, {{1.f}, {}}, {{std::nanf("")}, {}}}) {
         nn::CnnModelData bad = reading;  // one expression: two values, or a neutral outside [0, 1)
         bad.neutral = neutral;
         bad.reported = reported;
@@ -263,7 +265,7 @@ TEST(CnnLandmarks, DisplacementsAreInPatchPixelsWhateverTheFacesPlaceSizeAndRoll
     params.pose.tail<3>() = Eigen::Vector3d(1.0, -0.5, 30.0) - layout.centre;
     const Eigen::Matrix2d near = expression::patchToFrame(layout, expression::projectAnchors(layout, Eigen::VectorXd(), camera, params));
     EXPECT_NEAR(near.determinant() / far.determinant(), 4.0, 0.2);  // twice the size: four times the area
-    EXPECT_NEAR(far(0, 1), 0.0, 0.02 * far(0, 0));  // upright: no shear or turn
+    EXPECT_NEAR(far(0, 1), 0.0, 0.02 * far(0, 0));                  // upright: no shear or turn
     params.pose.head<3>() = fit::omegaFromEuler(Eigen::Vector3d(0.0, 0.0, 30.0));
     const Eigen::Matrix2d rolled = expression::patchToFrame(layout, expression::projectAnchors(layout, Eigen::VectorXd(), camera, params));
     EXPECT_NEAR(std::abs(std::atan2(rolled(1, 0), rolled(0, 0))) * 180.0 / M_PI, 30.0, 1.0);
@@ -290,7 +292,7 @@ TEST(PatchNet, ABatchGivesEachPatchItsOwnOutputs) {
     EXPECT_EQ(two.outputCount(), 7);
     for (const int b : {0, 1}) EXPECT_LT((both.segment(7 * b, 7) - one.predict(patches[b])).cwiseAbs().maxCoeff(), 1e-5) << b;
     EXPECT_GT((both.head(7) - both.tail(7)).cwiseAbs().maxCoeff(), 1e-3);  // two different patches, two answers
-    EXPECT_THROW(two.predict(patches[0]), Error);  // one patch for a net of two
+    EXPECT_THROW(two.predict(patches[0]), Error);                          // one patch for a net of two
 }
 
 TEST(CnnRefine, StopsWhenTheFaceIsNotInFrontOfTheCamera) {
@@ -327,7 +329,8 @@ TEST(CnnRefine, AMirrorAveragedUpdateIsThePatchsAndItsMirrorImagesUpdatesAverage
     EXPECT_THROW(expression::updateMirror({"browDown_L"}), Error);  // its partner is not read
 
     const auto face = FaceModel::load(test::shippedFaceModel());
-    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*face), nn::expressionIndices(face->expressionNames(), brows));
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*face),
+                                                                     nn::expressionIndices(face->expressionNames(), brows));
     const std::string onnx = test::fixtureBytes("mirror_fixture.onnx");
     nn::PatchNet one(onnx, 64, 8, "mirror fixture"), two(onnx, 64, 8, "mirror fixture, two at a time", 2);
     cv::Mat grey(480, 640, CV_8UC1);
@@ -394,7 +397,8 @@ TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
         if (b.faces.empty()) continue;
         const HeadPose& pa = *a.faces[0].pose;
         const HeadPose& pb = *b.faces[0].pose;
-        for (const float v : {pb.rotation.w, pb.rotation.x, pb.rotation.y, pb.rotation.z, pb.translation_mm.z}) EXPECT_TRUE(std::isfinite(v));
+        for (const float v : {pb.rotation.w, pb.rotation.x, pb.rotation.y, pb.rotation.z, pb.translation_mm.z})
+            EXPECT_TRUE(std::isfinite(v));
         // The landmarks are the LBF's; the pose (random net's updates) is the cascade's.
         EXPECT_EQ((*a.faces[0].landmarks)[30].x, (*b.faces[0].landmarks)[30].x);
         differ += std::abs(pa.euler_deg.y - pb.euler_deg.y) > 0.01f || std::abs(pa.translation_mm.z - pb.translation_mm.z) > 0.01f;
@@ -425,9 +429,9 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
         float browDownLeft;  ///< what the stage reports; negative: the fit's own value
         bool correctsFit = false;
     };
-    for (const Case& c : {Case{"browDown_L", {}, {}, 0.3f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f},
-                          Case{"browDown_L", {}, {false}, -1.f}, Case{"jawOpen", {}, {}, -1.f},
-                          Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f, true}, Case{"jawOpen", {0.1f}, {}, -1.f, true}}) {
+    for (const Case& c :
+         {Case{"browDown_L", {}, {}, 0.3f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f}, Case{"browDown_L", {}, {false}, -1.f},
+          Case{"jawOpen", {}, {}, -1.f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f, true}, Case{"jawOpen", {0.1f}, {}, -1.f, true}}) {
         nn::CnnModelData m;
         m.expressions = {c.shape};
         m.stages.push_back({1, test::fixtureBytes("cnn_expression_fixture.onnx")});
@@ -461,7 +465,8 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
                     EXPECT_NEAR(wb[k], std::min(1.f, wa[k] + 0.3f), 1e-5f) << "frame " << i;
                     continue;
                 }
-                EXPECT_NEAR(wb[k], read ? c.browDownLeft : wa[k], read ? 1e-5f : 0.f) << arkitNames()[k] << ", reading " << c.shape << ", frame " << i;
+                EXPECT_NEAR(wb[k], read ? c.browDownLeft : wa[k], read ? 1e-5f : 0.f)
+                    << arkitNames()[k] << ", reading " << c.shape << ", frame " << i;
             }
         }
     }
@@ -507,7 +512,8 @@ TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
         const core::Camera camera = core::cameraFor(view.width, view.height, 60.0, 0.0);
         const Eigen::Matrix2d toFrame = expression::patchToFrame(layout, expression::projectAnchors(layout, identity, camera, params));
         Eigen::Matrix3Xd slots;
-        const fit::Landmarks2d projected = expression::projectedLandmarks(basis, fit::shapeWithIdentity(basis, identity), camera, params, slots);
+        const fit::Landmarks2d projected = expression::projectedLandmarks(basis, fit::shapeWithIdentity(basis, identity), camera, params,
+                                                                          slots);
         const Eigen::Vector2d shift = toFrame * Eigen::Vector2d(3.0, 0.0);
         EXPECT_GT(shift.x(), 3.0);  // a patch pixel is more than a frame pixel on this clip's face
         double worst = 0.0;
@@ -727,7 +733,8 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
     const refine::SideShape rightPoints = right.apply(layout.mean), leftMirrored = left.apply(layout.mean);
     for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {
         face.col(refine::kRightSide[i]) = rightPoints.col(static_cast<Eigen::Index>(i));
-        face.col(refine::kLeftSide[i]) = Eigen::Vector2f(99.f - leftMirrored(0, static_cast<Eigen::Index>(i)), leftMirrored(1, static_cast<Eigen::Index>(i)));
+        face.col(refine::kLeftSide[i]) = Eigen::Vector2f(99.f - leftMirrored(0, static_cast<Eigen::Index>(i)),
+                                                         leftMirrored(1, static_cast<Eigen::Index>(i)));
     }
     landmarks::Shape68 mirroredFace;
     for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {  // the mirror image's right side is this face's left
@@ -748,8 +755,9 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
     }
     const cv::Matx23d leftToFrame = refine::sidePatchToFrame(layout, refine::sidePoints(face, true, frame.cols), true, frame.cols);
     refine::warpSide(layout, frame, leftToFrame, patch);
-    refine::warpSide(layout, flipped, refine::sidePatchToFrame(layout, refine::sidePoints(mirroredFace, false, flipped.cols), false, flipped.cols),
-                  mirrorPatch);
+    refine::warpSide(layout, flipped,
+                     refine::sidePatchToFrame(layout, refine::sidePoints(mirroredFace, false, flipped.cols), false, flipped.cols),
+                     mirrorPatch);
     EXPECT_LE(cv::norm(patch, mirrorPatch, cv::NORM_INF), 1.0);
 
     // Offsets of (+3, 0) patch pixels move the right side's points by B (3, 0) and the left side's by its mirror image.
@@ -819,7 +827,8 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     nn::CnnModelData m = refinerOnly(0.25f);
     const landmarks::Shape68& lbfMean = model::dataOf(*plain.landmarks).mean_shape;
     const float width = lbfMean.row(0).maxCoeff() - lbfMean.row(0).minCoeff();
-    const landmarks::Shape68 mean = ((lbfMean.colwise() - lbfMean.rowwise().mean()) * (22.f / width)).colwise() + Eigen::Vector2f(15.5f, 16.f);
+    const landmarks::Shape68 mean = ((lbfMean.colwise() - lbfMean.rowwise().mean()) * (22.f / width)).colwise() +
+                                    Eigen::Vector2f(15.5f, 16.f);
     m.refiner_mean.assign(mean.data(), mean.data() + 136);
     const std::string path = test::tempPath("refiner_stage.ftm");
     nn::writeCnnModel(path, m);
@@ -887,8 +896,9 @@ TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
         const auto found = detector->detect(core::viewOf(bgr));
         ASSERT_FALSE(found.empty()) << stem;
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-        const landmarks::Shape68 points = landmarks::alignFromStarts(
-            model::dataOf(*lbf), gray, landmarks::shapeFromBox(model::dataOf(*lbf), found[0].box, "yunet"), TrackerConfig{}.landmark_starts);
+        const landmarks::Shape68 points = landmarks::alignFromStarts(model::dataOf(*lbf), gray,
+                                                                     landmarks::shapeFromBox(model::dataOf(*lbf), found[0].box, "yunet"),
+                                                                     TrackerConfig{}.landmark_starts);
         const core::Similarity toFrame = refine::patchToFrame(layout, points);
         refine::warpAligned(layout, gray, toFrame, patch);
         const landmarks::Shape68 refined = refine::refinedLandmarks(layout, toFrame, net.predict(patch), points);

@@ -23,8 +23,8 @@
 namespace facetrack {
 namespace {
 
-#define FACETRACK_REQUIRE_DISPLAY()                                                                     \
-    do {                                                                                                \
+#define FACETRACK_REQUIRE_DISPLAY()                                                                             \
+    do {                                                                                                        \
         if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no X display: run this test under xvfb-run (ctest does)"; \
     } while (0)
 

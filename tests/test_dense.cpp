@@ -152,7 +152,8 @@ TEST(DenseCorrespondence, CanonicalMeshLiesOnTheModelAndFitsNoExpression) {
         const auto& p = corr.points[static_cast<std::size_t>(mediapipe)];
         for (int c = 0; c < 3; ++c) {
             const auto it = std::lower_bound(jawOpen->vertices.begin(), jawOpen->vertices.end(), p.vertices[c]);
-            if (it != jawOpen->vertices.end() && *it == p.vertices[c]) dy += p.weights[c] * jawOpen->deltas(1, it - jawOpen->vertices.begin());
+            if (it != jawOpen->vertices.end() && *it == p.vertices[c])
+                dy += p.weights[c] * jawOpen->deltas(1, it - jawOpen->vertices.begin());
         }
         return -dy;
     };

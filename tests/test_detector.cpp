@@ -50,9 +50,7 @@ AnnotatedFace sampleFace() {
     return {cv::imread(stem + ".jpg"), core::readPts(stem + ".pts")};
 }
 
-bool boxContains(const Box& b, const Eigen::Vector2f& p) {
-    return p.x() >= b.x0 && p.x() <= b.x1 && p.y() >= b.y0 && p.y() <= b.y1;
-}
+bool boxContains(const Box& b, const Eigen::Vector2f& p) { return p.x() >= b.x0 && p.x() <= b.x1 && p.y() >= b.y0 && p.y() <= b.y1; }
 
 TEST(Detector, YuNetFindsTheAnnotatedFace) {
     FACETRACK_REQUIRE_SHARED();

@@ -107,7 +107,7 @@ TEST(ShippedFaceModel, HasWhatTheTrackerNeeds) {
     const Eigen::Vector3f last = d.neutral.col(d.contour_candidates[2].back());
     EXPECT_LT(last.z(), first.z() - 0.5f);
 
-    EXPECT_GT(d.left_eye.centre.x(), 2.5f);   // subject's left is +x
+    EXPECT_GT(d.left_eye.centre.x(), 2.5f);  // subject's left is +x
     EXPECT_LT(d.right_eye.centre.x(), -2.5f);
     for (const auto* eye : {&d.left_eye, &d.right_eye}) {
         EXPECT_NEAR(eye->radius, 1.58f, 0.05f);
@@ -143,7 +143,8 @@ TEST(ShippedFaceModel, TheVerticesOfASubsetAreTheWholeMeshs) {
         }
     }
     EXPECT_GT(std::abs(m->vertices({}, expression)[static_cast<std::size_t>(m->landmarkVertices()[8])].y -
-                       m->vertices({}, {})[static_cast<std::size_t>(m->landmarkVertices()[8])].y), 1.f);  // the chin moved
+                       m->vertices({}, {})[static_cast<std::size_t>(m->landmarkVertices()[8])].y),
+              1.f);  // the chin moved
     std::vector<Vec3> out;
     EXPECT_THROW(m->vertices({}, {}, {m->vertexCount()}, out), Error);
     EXPECT_THROW(m->vertices({}, {}, {-1}, out), Error);
@@ -241,7 +242,8 @@ namespace {
 
 TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
     const std::string shipped = test::sourceDir() + "/models/landmark_convention.ftm";
-    if (!std::filesystem::exists(shipped)) GTEST_SKIP() << "models/landmark_convention.ftm is missing (build/tools/train_convention makes it)";
+    if (!std::filesystem::exists(shipped))
+        GTEST_SKIP() << "models/landmark_convention.ftm is missing (build/tools/train_convention makes it)";
     const model::LandmarkConvention c = model::readLandmarkConvention(shipped);
     // Jaw landmarks keep their vertices; the others move by millimetres, not centimetres.
     EXPECT_EQ(c.offsets_frontal_cm.leftCols(model::kContourLandmarkCount).cwiseAbs().maxCoeff(), 0.0);
@@ -299,7 +301,8 @@ TEST(LandmarkConvention, RoundTripsMovesOnlyTheLandmarkSlotsAndRejectsDamage) {
 /// same points whether read off a mesh or off the basis the fit uses.
 TEST(LandmarkConvention, LandmarkPointsAreTheFitsLandmarksOnTheMesh) {
     const std::string shipped = test::sourceDir() + "/models/landmark_convention.ftm";
-    if (!std::filesystem::exists(shipped)) GTEST_SKIP() << "models/landmark_convention.ftm is missing (build/tools/train_convention makes it)";
+    if (!std::filesystem::exists(shipped))
+        GTEST_SKIP() << "models/landmark_convention.ftm is missing (build/tools/train_convention makes it)";
     const auto bare = FaceModel::load(test::shippedFaceModel());
     const auto with = FaceModel::load(test::shippedFaceModel(), shipped);
     const std::vector<Vec3> mesh = with->vertices({}, {});

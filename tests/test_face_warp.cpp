@@ -11,7 +11,6 @@
 
 #include <opencv2/imgproc.hpp>
 
-
 namespace facetrack {
 namespace {
 
@@ -120,7 +119,9 @@ TEST(CascadeUpdate, TakesTheStartToTheFaceAndTurnsAboutTheFaceCentre) {
     turn.head<3>() = Eigen::Vector3d(0.1, -0.2, 0.05);
     fit::FaceParams turned = start;
     expression::applyUpdate(s.layout, turn, turned);
-    const auto centre = [&](const fit::FaceParams& p) { return Eigen::Vector3d(fit::rotationOf(p.omega()) * s.layout.centre + p.translation()); };
+    const auto centre = [&](const fit::FaceParams& p) {
+        return Eigen::Vector3d(fit::rotationOf(p.omega()) * s.layout.centre + p.translation());
+    };
     EXPECT_LT((centre(turned) - centre(start)).norm(), 1e-9);
     EXPECT_GT((turned.translation() - start.translation()).norm(), 0.5);  // the model origin, behind the face, moved
     EXPECT_NEAR(expression::updateBetween(s.layout, start, turned).head<3>().norm(), turn.head<3>().norm(), 1e-9);
@@ -174,8 +175,8 @@ TEST(FaceProfiling, TurnedFaceCarriesThePhotographsTextureAlong) {
 TEST(FaceProfiling, ExpressionCopiesMoveOneGroupOfShapesAndCarryTheTextureWithTheMesh) {
     const auto& s = scene();
     const cv::Mat photo = smoothTexture(640, 480, 9);
-    const std::vector<std::string> names = {"browDown_L", "browDown_R", "browInnerUp_L", "browInnerUp_R",
-                                            "browOuterUp_L", "browOuterUp_R", "mouthPucker", "jawOpen"};
+    const std::vector<std::string> names = {"browDown_L",    "browDown_R",    "browInnerUp_L", "browInnerUp_R",
+                                            "browOuterUp_L", "browOuterUp_R", "mouthPucker",   "jawOpen"};
     const std::vector<int> ids = nn::expressionIndices(s.model->expressionNames(), names);
     fit::FaceParams label = faceAt({0.0, 10.0, 0.0}, {0.0, 0.0, 50.0}, static_cast<Eigen::Index>(ids.size()));
     label.expression << 0.1, 0.1, 0.0, 0.0, 0.2, 0.2, 0.0, 0.3;
@@ -252,7 +253,8 @@ TEST(FaceProfiling, TurnSequenceGoesOutByTheStepAndComesBack) {
     const auto far = std::max_element(yaws.begin(), yaws.end());
     EXPECT_GE(*far, 40.0 - 0.5);
     const auto hiddenAt = [&](double yaw) {
-        return profile::profileFace(*s.model, photo, s.camera, identity, {}, photographed, profile::turnedBy(photographed, yaw - 30.0)).hidden_share;
+        return profile::profileFace(*s.model, photo, s.camera, identity, {}, photographed, profile::turnedBy(photographed, yaw - 30.0))
+            .hidden_share;
     };
     EXPECT_LE(hiddenAt(*far), 0.15);
     if (*far + 10.0 <= 80.0) {

@@ -57,7 +57,7 @@ TEST(MotionSpeed, IsTheSmoothedSpeedOfAPoint) {
     EXPECT_EQ(speed({5.0, 5.0}, 0.1), 0.0);  // the first position has no speed
     double v = 0.0;
     for (int i = 1; i <= 100; ++i) v = speed({5.0 + 3.0 * i / 30, 5.0 - 4.0 * i / 30}, 1.0 / 30, 2.0);
-    EXPECT_NEAR(v, 2.5, 1e-3);  // 5 units per second over a scale of 2
+    EXPECT_NEAR(v, 2.5, 1e-3);                // 5 units per second over a scale of 2
     EXPECT_EQ(speed({0.0, 0.0}, -1.0), 0.0);  // a bad time step starts again
     speed.reset();
     EXPECT_EQ(speed({1.0, 1.0}, 0.1), 0.0);
@@ -103,7 +103,8 @@ FilterRun filterPoints(bool wholeStage, double speedPxPerS) {
         for (int i = 0; i < 68; ++i) sample.segment<2>(2 * i) += Eigen::Vector2d(shift + noise(rng), noise(rng));
         if (wholeStage) {
             face.result.landmarks.emplace();
-            for (std::size_t i = 0; i < 68; ++i) (*face.result.landmarks)[i] = {static_cast<float>(sample[2 * i]), static_cast<float>(sample[2 * i + 1])};
+            for (std::size_t i = 0; i < 68; ++i)
+                (*face.result.landmarks)[i] = {static_cast<float>(sample[2 * i]), static_cast<float>(sample[2 * i + 1])};
             face.fresh = t == 0;
             EXPECT_EQ(stage->run(frame, face, state.get()), pipeline::Outcome::Ok);
             for (std::size_t i = 0; i < 68; ++i) sample.segment<2>(2 * i) << (*face.result.landmarks)[i].x, (*face.result.landmarks)[i].y;
@@ -122,8 +123,8 @@ FilterRun filterPoints(bool wholeStage, double speedPxPerS) {
 TEST(FilterStage, TheFacesMotionCutsTheLagOfAMovingFaceAndLittleOfTheSmoothingOfAStillOne) {
     const FilterRun stillStage = filterPoints(true, 0.0), stillAlone = filterPoints(false, 0.0);
     const FilterRun movingStage = filterPoints(true, 120.0), movingAlone = filterPoints(false, 120.0);
-    std::printf("still: jitter %.3f px (points alone %.3f); moving 2 eye distances/s: lag %.2f px (points alone %.2f)\n",
-                stillStage.jitter, stillAlone.jitter, movingStage.lag, movingAlone.lag);
+    std::printf("still: jitter %.3f px (points alone %.3f); moving 2 eye distances/s: lag %.2f px (points alone %.2f)\n", stillStage.jitter,
+                stillAlone.jitter, movingStage.lag, movingAlone.lag);
     EXPECT_LT(stillStage.jitter, 1.15 * stillAlone.jitter);
     EXPECT_LT(movingStage.lag, 0.6 * movingAlone.lag);
 }

@@ -29,8 +29,8 @@ struct SyntheticFrame {
 
 /// The face with identity `base` under a random pose (|yaw| <= maxYaw) and
 /// expression, its landmarks (jaw on the true silhouette) and those plus noise.
-SyntheticFrame randomFrame(const Scene& s, const Eigen::Matrix3Xd& base, std::mt19937& rng, double maxYaw,
-                           double noisePx, const std::vector<int>& expressions) {
+SyntheticFrame randomFrame(const Scene& s, const Eigen::Matrix3Xd& base, std::mt19937& rng, double maxYaw, double noisePx,
+                           const std::vector<int>& expressions) {
     std::uniform_real_distribution<double> unit(0.0, 1.0), sym(-1.0, 1.0);
     std::normal_distribution<double> noise(0.0, noisePx);
     SyntheticFrame f;
@@ -101,13 +101,16 @@ TEST(Fit, EulerAnglesRoundTripAndFollowTheDocumentedSigns) {
     fit::FaceParams p;
     p.pose << fit::omegaFromEuler({0, 30, 0}), 0, 0, 60;
     p.expression = Eigen::VectorXd::Zero(s.basis->expressionCount());
-    const auto l = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
+    const auto l = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p,
+                                         fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
     EXPECT_GT(l(0, 30), 0.5 * (l(0, 36) + l(0, 45)));
     // pitch > 0 is chin down: the chin comes closer to the eyes in the image.
     p.pose.head<3>() = fit::omegaFromEuler({25, 0, 0});
-    const auto down = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
+    const auto down = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p,
+                                            fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
     p.pose.head<3>().setZero();
-    const auto front = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
+    const auto front = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p,
+                                             fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
     EXPECT_LT(down(1, 8) - down(1, 27), front(1, 8) - front(1, 27));
     const HeadPose pose = fit::headPoseOf(p);
     EXPECT_NEAR(pose.translation_mm.z, 600.f, 1e-3f);
@@ -120,8 +123,11 @@ TEST(Fit, JawContourFollowsTheSilhouetteUnderYaw) {
     p.pose << fit::omegaFromEuler({0, 45, 0}), 0, 0, 60;
     p.expression = Eigen::VectorXd::Zero(s.basis->expressionCount());
     const auto contour = fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p);
-    const auto fixedJaw = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p,
-                                                [&] { fit::ContourSlots c; for (int i = 0; i < 17; ++i) c[i] = s.basis->landmark_slots[i]; return c; }());
+    const auto fixedJaw = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, [&] {
+        fit::ContourSlots c;
+        for (int i = 0; i < 17; ++i) c[i] = s.basis->landmark_slots[i];
+        return c;
+    }());
     const auto silhouette = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, contour);
     // Turned to the image's right, the subject's left cheek (landmarks 9..16,
     // image right) turns away: its silhouette lies further right than the fixed vertices.
@@ -140,7 +146,8 @@ TEST(Fit, JawSilhouetteStaysBesideItsLandmarkAtEveryYaw) {
     for (int i = 0; i < 17; ++i) fixed[i] = s.basis->landmark_slots[i];
     for (double yaw = -75.0; yaw <= 75.0; yaw += 5.0) {
         p.pose << fit::omegaFromEuler({0, yaw, 0}), 0, 0, 60;
-        const auto silhouette = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
+        const auto silhouette = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p,
+                                                      fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, p));
         const auto own = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, p, fixed);
         const double faceHeight = (own.col(8) - own.col(27)).norm();
         for (int i = 0; i < 17; ++i) {
@@ -193,8 +200,7 @@ struct FitErrors {
 
 /// Fits `frames` synthetic frames of one face (identity `truthIdentity`) with
 /// the fitter's current identity, cold.
-FitErrors fitFrames(const Scene& s, fit::FaceFitter& fitter, const Eigen::VectorXd& truthIdentity, int frames,
-                    std::uint32_t seed) {
+FitErrors fitFrames(const Scene& s, fit::FaceFitter& fitter, const Eigen::VectorXd& truthIdentity, int frames, std::uint32_t seed) {
     std::mt19937 rng(seed);
     const Eigen::Matrix3Xd truthBase = fit::shapeWithIdentity(*s.basis, truthIdentity);
     FitErrors e;
@@ -221,8 +227,8 @@ double percentile(std::vector<double> v, double q) {
     return v[static_cast<std::size_t>(q * (v.size() - 1))];
 }
 
-std::vector<fit::CalibrationFrame> calibrationWindow(const Scene& s, fit::FaceFitter& fitter,
-                                                     const Eigen::VectorXd& truthIdentity, int frames, std::uint32_t seed) {
+std::vector<fit::CalibrationFrame> calibrationWindow(const Scene& s, fit::FaceFitter& fitter, const Eigen::VectorXd& truthIdentity,
+                                                     int frames, std::uint32_t seed) {
     std::mt19937 rng(seed);
     const Eigen::Matrix3Xd truthBase = fit::shapeWithIdentity(*s.basis, truthIdentity);
     std::vector<fit::CalibrationFrame> window;
@@ -245,12 +251,16 @@ Summary summarise(const Scene& s, const FitErrors& e, const char* label) {
     double observableSq = 0;
     const auto observable = indicesOf(s, kObservable);
     for (const int k : observable) observableSq += rms[k] * rms[k];
-    const Summary out{mean(e.rotation_deg), percentile(e.rotation_deg, 0.95), percentile(e.translation_rel, 1.0),
-                      std::sqrt(observableSq / observable.size()), std::sqrt(rms.squaredNorm() / rms.size()), rms.maxCoeff()};
-    std::printf("%s: rotation error mean %.2f p95 %.2f deg; translation error max %.2f %%; expression RMS: "
-                "observable %.3f, all fitted %.3f (worst %.3f)\n",
-                label, out.rotation_mean, out.rotation_p95, 100 * out.translation_max, out.observable_rms,
-                out.fitted_rms, out.fitted_max);
+    const Summary out{mean(e.rotation_deg),
+                      percentile(e.rotation_deg, 0.95),
+                      percentile(e.translation_rel, 1.0),
+                      std::sqrt(observableSq / observable.size()),
+                      std::sqrt(rms.squaredNorm() / rms.size()),
+                      rms.maxCoeff()};
+    std::printf(
+        "%s: rotation error mean %.2f p95 %.2f deg; translation error max %.2f %%; expression RMS: "
+        "observable %.3f, all fitted %.3f (worst %.3f)\n",
+        label, out.rotation_mean, out.rotation_p95, 100 * out.translation_max, out.observable_rms, out.fitted_rms, out.fitted_max);
     for (int k = 0; k < rms.size(); ++k) std::printf("    %-18s RMS %.3f\n", names[k].c_str(), rms[k]);
     return out;
 }
@@ -293,7 +303,7 @@ TEST(Fit, LearnedPriorKeepsARelaxedFaceNeutralAndFollowsStrongExpressions) {
         truth.pose.tail<3>() = Eigen::Vector3d(1.0, -2.0, 55.0);
         truth.expression = expression;
         fit::Landmarks2d observed = fit::projectLandmarks(*s.basis, s.basis->neutral, s.camera, truth,
-                                                         fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, truth));
+                                                          fit::silhouetteContour(*s.basis, s.basis->neutral, s.camera, truth));
         for (int i = 0; i < observed.cols(); ++i) observed.col(i) += Eigen::Vector2d(noise(rng), noise(rng));
         fit::FaceParams p;
         fitter.fit(s.camera, observed, p, false);
@@ -344,9 +354,10 @@ TEST(Fit, IdentityCalibrationLowersTheLandmarkError) {
         const Eigen::VectorXd estimate = fit::calibrateIdentity(*s.basis, window, fitter.settings());
         fitter.setIdentity(estimate);
         const double calibrated = fitFrames(s, fitter, identity, 40, 100 + subject).landmark_rms;
-        std::printf("subject %d: landmark RMS vs noise-free, mean identity %.4f, calibrated %.4f; "
-                    "|a - a_true| %.2f -> %.2f\n",
-                    subject, meanFace, calibrated, identity.norm(), (estimate - identity).norm());
+        std::printf(
+            "subject %d: landmark RMS vs noise-free, mean identity %.4f, calibrated %.4f; "
+            "|a - a_true| %.2f -> %.2f\n",
+            subject, meanFace, calibrated, identity.norm(), (estimate - identity).norm());
         EXPECT_LT(calibrated, 0.85 * meanFace);
         EXPECT_LT((estimate - identity).norm(), identity.norm());
     }
@@ -357,8 +368,7 @@ TEST(Fit, BadObservationsGiveAnInfiniteResidualNotNaN) {
     fit::FaceFitter fitter(s.basis, {});
     fit::Landmarks2d bad = fit::Landmarks2d::Zero();
     fit::FaceParams p;
-    EXPECT_TRUE(std::isinf(fitter.fit(s.camera, bad, p, false).residual) ||
-                fitter.fit(s.camera, bad, p, false).residual >= 0.0);
+    EXPECT_TRUE(std::isinf(fitter.fit(s.camera, bad, p, false).residual) || fitter.fit(s.camera, bad, p, false).residual >= 0.0);
     EXPECT_TRUE(p.pose.allFinite());
     bad(0, 3) = std::numeric_limits<double>::quiet_NaN();
     EXPECT_TRUE(std::isinf(fitter.fit(s.camera, bad, p, false).residual));
@@ -416,8 +426,7 @@ TEST_F(CostGradients, PointsCostJacobiansMatchFiniteDifferences) {
         for (const int outliers : {0, 8}) {
             const auto r = probe(withIdentity, outliers);
             EXPECT_TRUE(r.return_value);
-            EXPECT_LT(r.maximum_relative_error, 1e-5) << "identity " << withIdentity << ", outliers " << outliers << "\n"
-                                                     << r.error_log;
+            EXPECT_LT(r.maximum_relative_error, 1e-5) << "identity " << withIdentity << ", outliers " << outliers << "\n" << r.error_log;
         }
     }
 }
@@ -427,7 +436,8 @@ TEST_F(CostGradients, OutliersAreInTheLinearPartOfTheLoss) {
     // |e| ~ 0.58 face sizes, so |r| = sqrt(2 delta |e| - delta^2) ~ 0.24, well below |e|.
     Landmarks2d observed = frame.observed;
     observed.col(3) += Eigen::Vector2d(0.5 * scale, -0.3 * scale);
-    const fit::PointsCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, fit::landmarkSlots(*s.basis), false);
+    const fit::PointsCost cost({s.basis.get(), &s.basis->neutral, &s.camera, observed.data(), &scale, 0.05}, fit::landmarkSlots(*s.basis),
+                               false);
     const double* blocks[] = {pose.data(), frame.truth.expression.data()};
     Eigen::VectorXd residuals(2 * model::kLandmarkCount);
     ASSERT_TRUE(cost.Evaluate(blocks, residuals.data(), nullptr));

@@ -39,9 +39,9 @@ constexpr float kDeg = 3.14159265f / 180.f;
 /// placement (without the corner cascade: 15), not only a flipped axis.
 constexpr double kRenderGazeToleranceDeg = 7.0;
 
-#define FACETRACK_REQUIRE_EYE_MODEL()                                                        \
-    do {                                                                                     \
-        if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm"))           \
+#define FACETRACK_REQUIRE_EYE_MODEL()                                                            \
+    do {                                                                                         \
+        if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm"))               \
             GTEST_SKIP() << "models/eye_model.ftm is missing (build/tools/train_eyes makes it)"; \
     } while (0)
 
@@ -84,7 +84,8 @@ TEST(EyePatch, AnEyeCrossingTheBorderReadsTheRepeatedBorder) {
     cv::randu(gray, 0, 256);
     constexpr int kPad = 40;
     cv::copyMakeBorder(gray, padded, kPad, kPad, kPad, kPad, cv::BORDER_REPLICATE);
-    for (const auto& [outer, inner] : {std::pair<Point2, Point2>{{-12.3f, 7.6f}, {21.4f, -2.2f}}, {{139.1f, 104.7f}, {171.5f, 118.2f}},
+    for (const auto& [outer, inner] : {std::pair<Point2, Point2>{{-12.3f, 7.6f}, {21.4f, -2.2f}},
+                                       {{139.1f, 104.7f}, {171.5f, 118.2f}},
                                        {{60.4f, 50.9f}, {95.2f, 47.3f}}}) {
         EyePatch cut, fromPadded;
         ASSERT_TRUE(cutEyePatch(gray, outer, inner, false, cut));
@@ -411,7 +412,9 @@ TEST(EyeModelFile, CarriesAnIrisNetAndReadsVersionsOneToThree) {
     writeEyeModel(path, plain);
     std::string payload = core::readModelFile(path, kEyeModelMagic, kEyeModelVersion, "eye model");
     for (const std::uint32_t version : {3u, 2u, 1u}) {
-        payload.resize(payload.size() - (version == 3 ? 2 * sizeof(float) + sizeof(std::int32_t) : version == 2 ? 1 : sizeof(std::uint32_t)));
+        payload.resize(payload.size() - (version == 3   ? 2 * sizeof(float) + sizeof(std::int32_t)
+                                         : version == 2 ? 1
+                                                        : sizeof(std::uint32_t)));
         core::writeModelFile(path, kEyeModelMagic, version, payload);
         const EyeModelData old = readEyeModel(path);
         EXPECT_TRUE(old.iris_net.empty());
@@ -456,7 +459,8 @@ void placeEyes(std::array<IdealEye, 2>& eyes, const Eigen::Matrix3f& R, const Ei
         eye.seen.centre = R * Eigen::Vector3f(side * 31.f, 35.f, 70.f) + t;
         const auto project = [&](const Eigen::Vector3f& head) {
             const Eigen::Vector3f c = R * head + t;
-            return Point2{static_cast<float>(camera.fx * c.x() / c.z() + camera.cx), static_cast<float>(camera.fy * c.y() / c.z() + camera.cy)};
+            return Point2{static_cast<float>(camera.fx * c.x() / c.z() + camera.cx),
+                          static_cast<float>(camera.fy * c.y() / c.z() + camera.cy)};
         };
         ASSERT_TRUE(cutEyePatch(gray, project({side * 45.f, 35.f, 78.f}), project({side * 17.f, 35.f, 78.f}), e == 0, eye.patch));
         eye.seen.patch = &eye.patch;
@@ -468,8 +472,7 @@ void placeEyes(std::array<IdealEye, 2>& eyes, const Eigen::Matrix3f& R, const Ei
 
 TEST(GazeFit, RecoversKnownGazeFromIdealMapsAndHoldsWhenBothEyesClose) {
     // A face 500 mm away, turned 15 degrees.
-    const Eigen::Matrix3f R =
-        (Eigen::Quaternionf(0, 1, 0, 0) * Eigen::AngleAxisf(15 * kDeg, Eigen::Vector3f::UnitY())).toRotationMatrix();
+    const Eigen::Matrix3f R = (Eigen::Quaternionf(0, 1, 0, 0) * Eigen::AngleAxisf(15 * kDeg, Eigen::Vector3f::UnitY())).toRotationMatrix();
     core::Camera camera;
     camera.fx = camera.fy = 700, camera.cx = 320, camera.cy = 240;
     std::array<IdealEye, 2> eyes;
@@ -637,7 +640,8 @@ TEST_F(GazeOnRenders, TheCornerCascadeFindsTheEyeCorners) {
     for (const float headYaw : {-20.f, 0.f, 20.f}) {
         for (const auto& g : std::vector<std::array<float, 2>>{{0, 0}, {15, 5}, {-15, -5}}) {
             tools::SyntheticFace f = face(g[0], g[1]);
-            const Eigen::Quaternionf q = Eigen::Quaternionf(0.f, 1.f, 0.f, 0.f) * Eigen::AngleAxisf(headYaw * kDeg, Eigen::Vector3f::UnitY());
+            const Eigen::Quaternionf q = Eigen::Quaternionf(0.f, 1.f, 0.f, 0.f) *
+                                         Eigen::AngleAxisf(headYaw * kDeg, Eigen::Vector3f::UnitY());
             f.rotation = {q.w(), q.x(), q.y(), q.z()};
             tracker_->reset();
             const cv::Mat image = renderer_->render(f);
@@ -653,8 +657,10 @@ TEST_F(GazeOnRenders, TheCornerCascadeFindsTheEyeCorners) {
             for (const Eye eye : {Eye::Left, Eye::Right}) {
                 const auto o = static_cast<std::size_t>(outerCorner(eye)), i = static_cast<std::size_t>(innerCorner(eye));
                 const auto midpointError = [&](Point2 outer, Point2 inner) {
-                    return 100.0 * std::hypot(0.5f * (outer.x + inner.x - truth[o].x - truth[i].x),
-                                              0.5f * (outer.y + inner.y - truth[o].y - truth[i].y)) / iod;
+                    return 100.0 *
+                           std::hypot(0.5f * (outer.x + inner.x - truth[o].x - truth[i].x),
+                                      0.5f * (outer.y + inner.y - truth[o].y - truth[i].y)) /
+                           iod;
                 };
                 EyePatch patch, scratch;
                 ASSERT_TRUE(cutEyePatch(gray, l, eye, patch));

@@ -164,8 +164,9 @@ TEST(LbfModelFile, RoundTripAndCorruption) {
     EXPECT_EQ(back.stages[0].regression, set.model.stages[0].regression);
     EXPECT_EQ(back.stages[0].row_scale, set.model.stages[0].row_scale);
     const Shape68 start = set.samples[0].shape;
-    EXPECT_LT((alignLandmarks(back, set.images[0].gray, start) - alignLandmarks(set.model, set.images[0].gray, start))
-                  .cwiseAbs().maxCoeff(), 0.05f);
+    EXPECT_LT(
+        (alignLandmarks(back, set.images[0].gray, start) - alignLandmarks(set.model, set.images[0].gray, start)).cwiseAbs().maxCoeff(),
+        0.05f);
 
     {
         std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);

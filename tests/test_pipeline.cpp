@@ -63,13 +63,13 @@ class FakeStage final : public pipeline::Stage {
 public:
     FakeStage(std::string name, bool available, std::vector<std::string>* log, float index)
         : name_(std::move(name)), available_(available), log_(log), index_(index) {}
-    std::vector<int> fail_on;  // frame numbers (0-based) on which run() reports a lost face
-    std::vector<int> doubt_on; // frame numbers on which a followed face is moved by doubt_jump and doubted
-    std::vector<int> unsettle_on; // frame numbers on which a followed face is marked unsettled
+    std::vector<int> fail_on;      // frame numbers (0-based) on which run() reports a lost face
+    std::vector<int> doubt_on;     // frame numbers on which a followed face is moved by doubt_jump and doubted
+    std::vector<int> unsettle_on;  // frame numbers on which a followed face is marked unsettled
     float doubt_jump = 0.f;
-    int frame = -1;            // set by the test before each process()
-    Counter seen;              // the face state's counters as of the last run
-    double dt = 0.0;           // the last run's FrameInput::dt
+    int frame = -1;               // set by the test before each process()
+    Counter seen;                 // the face state's counters as of the last run
+    double dt = 0.0;              // the last run's FrameInput::dt
     pipeline::Contract declared;  // what contract() says
     pipeline::Upstream told;      // what connect() was told
     bool connected = false;
@@ -99,7 +99,8 @@ public:
         face.locate(moved);
         if (std::find(fail_on.begin(), fail_on.end(), frame) != fail_on.end()) return pipeline::Outcome::Lost;
         if (doubt) return pipeline::Outcome::Doubtful;
-        if (!face.fresh && std::find(unsettle_on.begin(), unsettle_on.end(), frame) != unsettle_on.end()) return pipeline::Outcome::Unsettled;
+        if (!face.fresh && std::find(unsettle_on.begin(), unsettle_on.end(), frame) != unsettle_on.end())
+            return pipeline::Outcome::Unsettled;
         return pipeline::Outcome::Ok;
     }
     void resetIdentity(pipeline::StageState* state) const override { ++static_cast<Counter&>(*state).resets; }
@@ -119,16 +120,14 @@ protected:
         pipeline::StageList stages;
         for (std::size_t i = 0; i < names.size(); ++i) {
             const bool available = names[i][0] != '-';
-            auto stage = std::make_unique<FakeStage>(available ? names[i] : names[i].substr(1), available, &log,
-                                                     static_cast<float>(i));
+            auto stage = std::make_unique<FakeStage>(available ? names[i] : names[i].substr(1), available, &log, static_cast<float>(i));
             if (i < contracts.size()) stage->declared = contracts[i];
             fakes.push_back(stage.get());
             stages.push_back(std::move(stage));
         }
         track::LifecycleSettings settings;
         settings.verify_interval = verifyInterval;
-        core = std::make_unique<track::TrackerCore>(std::make_unique<FakeDetector>(&detections, &present), std::move(stages),
-                                                    settings);
+        core = std::make_unique<track::TrackerCore>(std::make_unique<FakeDetector>(&detections, &present), std::move(stages), settings);
     }
     FrameResult& step(const std::vector<Box>* boxes = nullptr) {
         for (auto* f : fakes) f->frame = frame;
@@ -163,7 +162,7 @@ TEST_F(StageRunner, ListOrderIsExecutionOrderAndTimingOrder) {
     EXPECT_EQ(names(second), (std::vector<std::string>{"c", "a", "b"}));  // followed: no search
     ASSERT_EQ(second.faces.size(), 1u);
     EXPECT_TRUE(second.faces[0].tracked);
-    EXPECT_EQ(second.faces[0].fit_residual, 2.f);  // the last stage wrote last
+    EXPECT_EQ(second.faces[0].fit_residual, 2.f);   // the last stage wrote last
     EXPECT_EQ(second.faces[0].box.x0, 20.f + 6.f);  // each stage moved the face, two frames of three stages
     const auto listed = core->stages();
     ASSERT_EQ(listed.size(), 5u);
@@ -255,7 +254,7 @@ TEST_F(StageRunner, TimeThatDoesNotIncreaseCountsAsOneFrameAt30Fps) {
     EXPECT_NEAR(at(10.5), 1.0 / 30, 1e-12);  // repeated
     EXPECT_NEAR(at(9.0), 1.0 / 30, 1e-12);   // backwards
     EXPECT_NEAR(at(std::nan("")), 1.0 / 30, 1e-12);
-    EXPECT_NEAR(at(11.0), 0.5, 1e-12);       // measured from the last good time
+    EXPECT_NEAR(at(11.0), 0.5, 1e-12);  // measured from the last good time
 }
 
 TEST_F(StageRunner, CallerBoxesReplaceTheDetector) {
@@ -277,7 +276,7 @@ TEST_F(StageRunner, VerificationDropsAFaceTheDetectorNoLongerSees) {
     present = false;  // the detector no longer finds it on the crop
     const FrameResult& r = step();
     EXPECT_TRUE(r.faces.empty());
-    EXPECT_TRUE(log.empty());  // dropped before the stages
+    EXPECT_TRUE(log.empty());                                             // dropped before the stages
     EXPECT_EQ(names(r), (std::vector<std::string>{"detect", "verify"}));  // verified, lost, searched again
 }
 
@@ -292,7 +291,7 @@ TEST_F(StageRunner, AStageInDoubtRunsAgainWithTheStagesBeforeIt) {
     FrameResult r = step();
     EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "a", "b", "c"}));
     EXPECT_EQ(names(r), (std::vector<std::string>{"a", "b", "c"}));
-    EXPECT_EQ(fakes[0]->seen.runs, 3);  // its state carried from the first pass to the second
+    EXPECT_EQ(fakes[0]->seen.runs, 3);              // its state carried from the first pass to the second
     EXPECT_EQ(r.faces.at(0).box.x0, 20.f + 3 + 5);  // three stages, then two again
     step();
     EXPECT_EQ(log, (std::vector<std::string>{"a", "b", "c"}));
@@ -336,17 +335,17 @@ TEST_F(StageRunner, AFaceInDoubtIsCheckedAndRestartsWhereTheDetectorSeesIt) {
     ASSERT_EQ(r.faces.size(), 1u);
     EXPECT_EQ(r.faces[0].id, id);
     EXPECT_FALSE(r.faces[0].tracked);
-    EXPECT_EQ(r.faces[0].box.x0, 21.f);    // the detection, moved once (a fresh face is not run again)
+    EXPECT_EQ(r.faces[0].box.x0, 21.f);  // the detection, moved once (a fresh face is not run again)
     EXPECT_EQ(names(r), (std::vector<std::string>{"verify", "a"}));
 
-    fakes[0]->doubt_jump = 0.f;            // frame 3: doubted where the detector sees it
+    fakes[0]->doubt_jump = 0.f;  // frame 3: doubted where the detector sees it
     r = step();
     EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));
     EXPECT_EQ(detections, 3);
     EXPECT_TRUE(r.faces.at(0).tracked);
     EXPECT_EQ(r.faces[0].box.x0, 23.f);
 
-    present = false;                       // frame 4: doubted, the detector sees nothing: kept
+    present = false;  // frame 4: doubted, the detector sees nothing: kept
     fakes[0]->doubt_jump = 12.f;
     r = step();
     EXPECT_EQ(log, (std::vector<std::string>{"a", "a"}));
@@ -368,9 +367,9 @@ TEST_F(StageRunner, AFaceInDoubtMustAgreeWithTheDetectorMoreCloselyThanAPeriodic
     build({"a"}, 30);
     fakes[0]->doubt_on = {2};
     frame = 0;
-    step();                        // 21..61
-    step();                        // 22..62
-    fakes[0]->doubt_jump = 5.f;    // frame 2: the stage moves it to 28..68 and doubts it (and again to 34..74)
+    step();                      // 21..61
+    step();                      // 22..62
+    fakes[0]->doubt_jump = 5.f;  // frame 2: the stage moves it to 28..68 and doubts it (and again to 34..74)
     r = step();
     EXPECT_EQ(log, (std::vector<std::string>{"a", "a", "a"}));  // run again, then from the detection
     EXPECT_FALSE(r.faces.at(0).tracked);

@@ -102,9 +102,9 @@ TEST(HeadPoseMatrices, AgreeWithTheQuaternionAndTheDocumentedExample) {
         EXPECT_NEAR(frontal.gl_model_view[k], gl[k], 1e-5f) << k;
     }
     // Any pose: M x = R x + t, and GL's is the same with y and z negated.
-    const HeadPose pose = fit::headPoseOf(Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -0.8, 0.5).normalized())) *
-                                              Eigen::Quaterniond(0, 1, 0, 0),
-                                          Eigen::Vector3d(-40, 25, 620));
+    const HeadPose pose = fit::headPoseOf(
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -0.8, 0.5).normalized())) * Eigen::Quaterniond(0, 1, 0, 0),
+        Eigen::Vector3d(-40, 25, 620));
     const Vec3 x{31.f, -12.f, 55.f};
     const Vec3 expected = toCamera(pose, x);
     const Mat4& m = pose.camera_from_model;

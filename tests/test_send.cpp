@@ -479,8 +479,9 @@ TEST(SendCommand, StreamsAClipToAReceiver) {
     FACETRACK_REQUIRE_SHARED();
     Receiver receiver;
     const test::CommandRun run = test::runCommand(
-        FACETRACK_CLI, "send --input '" + test::sharedDir() + "/data/clips/liveportrait_d3_frown_surprise.mp4' --protocol openseeface --to " +
-                           receiver.address() + " --frames 8 --fast");
+        FACETRACK_CLI, "send --input '" + test::sharedDir() +
+                           "/data/clips/liveportrait_d3_frown_surprise.mp4' --protocol openseeface --to " + receiver.address() +
+                           " --frames 8 --fast");
     ASSERT_EQ(run.exit_code, 0) << run.err;
     EXPECT_NE(run.err.find("8 frames sent"), std::string::npos) << run.err;
     EXPECT_NE(run.err.find("capture to sent p50"), std::string::npos) << run.err;

@@ -24,10 +24,9 @@ namespace facetrack::test {
 inline std::string sharedDir() { return core::sharedDirectory(); }
 
 /// Skips the calling test, with a message saying why, when ../shared is absent.
-#define FACETRACK_REQUIRE_SHARED()                                                              \
-    do {                                                                                        \
-        if (::facetrack::test::sharedDir().empty())                                             \
-            GTEST_SKIP() << "../shared not found (set FACETRACK_SHARED_DIR); this test needs it"; \
+#define FACETRACK_REQUIRE_SHARED()                                                                                                        \
+    do {                                                                                                                                  \
+        if (::facetrack::test::sharedDir().empty()) GTEST_SKIP() << "../shared not found (set FACETRACK_SHARED_DIR); this test needs it"; \
     } while (0)
 
 inline std::string sourceDir() { return FACETRACK_TEST_SOURCE_DIR; }
@@ -64,7 +63,9 @@ inline std::string tempPath(const std::string& name) {
     return (std::filesystem::temp_directory_path() / ("facetrack_test_" + std::to_string(::getpid()) + "_" + name)).string();
 }
 /// The bytes of a file in tests/data.
-inline std::string fixtureBytes(const std::string& name) { return core::readFileBytes(sourceDir() + "/tests/data/" + name, "fixture " + name); }
+inline std::string fixtureBytes(const std::string& name) {
+    return core::readFileBytes(sourceDir() + "/tests/data/" + name, "fixture " + name);
+}
 inline std::string shippedFaceModel() { return sourceDir() + "/models/face_model.ftm"; }
 
 struct CommandRun {

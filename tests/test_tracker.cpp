@@ -156,10 +156,10 @@ namespace {
 
 bool shipped() { return std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm"); }
 
-#define FACETRACK_REQUIRE_PIPELINE()                                                        \
-    do {                                                                                    \
-        FACETRACK_REQUIRE_SHARED();                                                         \
-        if (!shipped()) GTEST_SKIP() << "models/landmarks_lbf.ftm is not shipped";          \
+#define FACETRACK_REQUIRE_PIPELINE()                                               \
+    do {                                                                           \
+        FACETRACK_REQUIRE_SHARED();                                                \
+        if (!shipped()) GTEST_SKIP() << "models/landmarks_lbf.ftm is not shipped"; \
     } while (0)
 
 std::vector<std::string> stageNames(const FrameResult& r) {
@@ -274,9 +274,10 @@ TEST(Tracker, FollowingAStillFaceKeepsItsLandmarkAccuracy) {
     }
     ASSERT_GE(faces, 30);
     EXPECT_LE(missed, 2);
-    std::printf("%d lfpw test faces (%d not found on the first frame, left out): mean NME %.2f %% found, %.2f %% after five "
-                "frames followed\n",
-                faces, missed, 100 * found / faces, 100 * followed / faces);
+    std::printf(
+        "%d lfpw test faces (%d not found on the first frame, left out): mean NME %.2f %% found, %.2f %% after five "
+        "frames followed\n",
+        faces, missed, 100 * found / faces, 100 * followed / faces);
     EXPECT_LT(followed, 1.05 * found);
 }
 
@@ -372,9 +373,10 @@ TEST(Tracker, AFaceNoStageCanPlaceAfterASuddenMoveKeepsItsId) {
         return counts;
     };
     const Counts checked = run(TrackerConfig{}.verify_interval), unchecked = run(0);
-    std::printf("after a 40° roll and 1.3x the size in one frame, the face keeps its id on %d of %d photographs (without the "
-                "detector's checks %d of %d)\n",
-                checked.sameId, checked.followed, unchecked.sameId, unchecked.followed);
+    std::printf(
+        "after a 40° roll and 1.3x the size in one frame, the face keeps its id on %d of %d photographs (without the "
+        "detector's checks %d of %d)\n",
+        checked.sameId, checked.followed, unchecked.sameId, unchecked.followed);
     EXPECT_GE(checked.followed, 20);
     EXPECT_GE(checked.sameId, checked.followed - 1);
     // Without the checks a face no stage places is found again by the next search, as a new face (8 of 25 when written).
@@ -446,7 +448,8 @@ TEST(Tracker, AnyFrameGivesFiniteResultsOrAClearError) {
         EXPECT_TRUE(run(blank, 1.1).faces.empty());
     EXPECT_EQ(face(1.2).faces.size(), 1u);
     // The frame's size changes mid-stream: 1 x 1, 7 x 5, a grey 8K frame, half the size, then the face.
-    for (const cv::Size size : {cv::Size(1, 1), cv::Size(7, 5)}) EXPECT_TRUE(run(cv::Mat(size, CV_8UC3, cv::Scalar::all(90)), 1.3).faces.empty());
+    for (const cv::Size size : {cv::Size(1, 1), cv::Size(7, 5)})
+        EXPECT_TRUE(run(cv::Mat(size, CV_8UC3, cv::Scalar::all(90)), 1.3).faces.empty());
     {
         cv::Mat big(4320, 7680, CV_8UC1, cv::Scalar::all(128));
         EXPECT_TRUE(tracker.process(ImageView{big.data, big.cols, big.rows, big.step[0], PixelFormat::Gray8}, 1.4).faces.empty());

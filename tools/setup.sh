@@ -5,8 +5,8 @@
 set -euo pipefail
 
 packages=(
-  # toolchain
-  cmake g++ make pkg-config
+  # toolchain, and the format check (tools/check_format.sh)
+  cmake g++ make pkg-config clang-format
   # libraries the library links
   libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev
   # demo: window, GL maths, camera

@@ -19,8 +19,8 @@ int main(int argc, char** argv) {
         facetrack::FrameResult result;
         std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * height * 3);
         for (int frame = 0; std::fread(pixels.data(), 1, pixels.size(), stdin) == pixels.size(); ++frame) {
-            tracker.process({pixels.data(), width, height, static_cast<std::size_t>(width) * 3, facetrack::PixelFormat::Bgr8},
-                            frame / 30.0, result);
+            tracker.process({pixels.data(), width, height, static_cast<std::size_t>(width) * 3, facetrack::PixelFormat::Bgr8}, frame / 30.0,
+                            result);
             if (result.faces.empty() || !result.faces[0].pose) {
                 std::printf("none\n");
                 continue;

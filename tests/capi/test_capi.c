@@ -12,12 +12,12 @@
 #include <unistd.h>
 
 static int failures = 0;
-#define CHECK(cond)                                                          \
-    do {                                                                     \
-        if (!(cond)) {                                                       \
+#define CHECK(cond)                                                                  \
+    do {                                                                             \
+        if (!(cond)) {                                                               \
             fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-            ++failures;                                                      \
-        }                                                                    \
+            ++failures;                                                              \
+        }                                                                            \
     } while (0)
 
 enum { kWidth = 400, kHeight = 300, kFrames = 30 };
@@ -137,9 +137,9 @@ int main(void) {
     {
         int32_t estimated[FT_ARKIT_COUNT];
         CHECK(ft_tracker_estimated_shapes(tracker, estimated) == FT_OK);
-        CHECK(estimated[17] == 1);  /* jawOpen: the fit's */
-        CHECK(estimated[51] == 0);  /* tongueOut: nothing estimates it */
-        CHECK(estimated[41] == 1);  /* browDownLeft: the shipped CNN file's expression stage */
+        CHECK(estimated[17] == 1); /* jawOpen: the fit's */
+        CHECK(estimated[51] == 0); /* tongueOut: nothing estimates it */
+        CHECK(estimated[41] == 1); /* browDownLeft: the shipped CNN file's expression stage */
         CHECK(ft_tracker_estimated_shapes(NULL, estimated) == FT_INVALID_ARGUMENT);
         CHECK(ft_tracker_estimated_shapes(tracker, NULL) == FT_INVALID_ARGUMENT);
     }

@@ -14,8 +14,8 @@ int main(int argc, char** argv) {
         facetrack::Tracker tracker(models, config);
         std::vector<std::uint8_t> gray(320 * 240, 128);
         const auto result = tracker.process({gray.data(), 320, 240, 320, facetrack::PixelFormat::Gray8}, 0.0);
-        std::printf("facetrack %s: %d vertices, %zu faces in a blank frame\n", facetrack::versionString(),
-                    models.face->vertexCount(), result.faces.size());
+        std::printf("facetrack %s: %d vertices, %zu faces in a blank frame\n", facetrack::versionString(), models.face->vertexCount(),
+                    result.faces.size());
         return result.faces.empty() ? 0 : 1;
     } catch (const facetrack::Error& e) {
         std::fprintf(stderr, "consumer: %s\n", e.what());

@@ -15,8 +15,7 @@ namespace facetrack::tools {
 class Args {
 public:
     /// valued: options that take a value; flags: options that do not.
-    Args(const std::vector<std::string>& argv, const std::set<std::string>& valued,
-         const std::set<std::string>& flags = {}) {
+    Args(const std::vector<std::string>& argv, const std::set<std::string>& valued, const std::set<std::string>& flags = {}) {
         for (std::size_t i = 0; i < argv.size(); ++i) {
             const std::string& a = argv[i];
             if (a.rfind("--", 0) != 0 || a == "--") {
@@ -43,8 +42,7 @@ public:
             std::size_t used = 0;
             const double v = std::stod(get(name), &used);
             if (used == get(name).size()) return v;
-        } catch (const std::exception&) {
-        }
+        } catch (const std::exception&) {}
         throw Error("option " + name + " expects a number, got '" + get(name) + "'");
     }
 
@@ -58,8 +56,7 @@ public:
             const long long v = std::stoll(text, &used);
             if (used == text.size() && v >= std::numeric_limits<int>::min() && v <= std::numeric_limits<int>::max())
                 return static_cast<int>(v);
-        } catch (const std::exception&) {
-        }
+        } catch (const std::exception&) {}
         throw Error("option " + name + " expects a whole number, got '" + text + "'");
     }
 

@@ -68,10 +68,14 @@ std::string MediaReader::describe() const {
 
 bool MediaReader::next(MediaFrame& frame) {
     switch (read(frame)) {
-        case ReadStatus::Frame: return true;
-        case ReadStatus::End: return false;
-        case ReadStatus::Timeout: throw Error("camera " + video_name_ + " sent no frame in time (is it in use, or covered?)");
-        case ReadStatus::Disconnected: throw Error("camera " + video_name_ + " went away (unplugged?)");
+        case ReadStatus::Frame:
+            return true;
+        case ReadStatus::End:
+            return false;
+        case ReadStatus::Timeout:
+            throw Error("camera " + video_name_ + " sent no frame in time (is it in use, or covered?)");
+        case ReadStatus::Disconnected:
+            throw Error("camera " + video_name_ + " went away (unplugged?)");
     }
     return false;
 }

@@ -14,9 +14,9 @@
 namespace facetrack::tools {
 
 struct MediaFrame {
-    std::string source;  ///< the image's path, or the clip's / camera's
-    int index = 0;       ///< frame (or image) number within the source, from 0
-    double time_s = 0.0; ///< timestamp: index / fps for clips, index (1 s apart) for images
+    std::string source;   ///< the image's path, or the clip's / camera's
+    int index = 0;        ///< frame (or image) number within the source, from 0
+    double time_s = 0.0;  ///< timestamp: index / fps for clips, index (1 s apart) for images
     cv::Mat bgr;
 };
 

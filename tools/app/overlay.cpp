@@ -14,9 +14,7 @@ struct Projector {
         const Vec3 c = facetrack::toCamera(pose, v);
         return {c.x, c.y, c.z};
     }
-    cv::Point2f project(const cv::Point3f& p) const {
-        return {camera.fx * p.x / p.z + camera.cx, camera.fy * p.y / p.z + camera.cy};
-    }
+    cv::Point2f project(const cv::Point3f& p) const { return {camera.fx * p.x / p.z + camera.cx, camera.fy * p.y / p.z + camera.cy}; }
 };
 
 constexpr int kShift = 4;  // sub-pixel drawing: coordinates times 16
@@ -60,12 +58,10 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result, const std::v
             // Model axes, 50 mm long: x red (subject's left), y green (up), z blue (out of the face).
             const Vec3 o = vertices[axes_origin_];
             const cv::Point2f origin = projector.project(projector.toCamera(o));
-            const std::array<std::pair<Vec3, cv::Scalar>, 3> axes = {{{{o.x + 50, o.y, o.z}, {0, 0, 255}},
-                                                                     {{o.x, o.y + 50, o.z}, {0, 200, 0}},
-                                                                     {{o.x, o.y, o.z + 50}, {255, 80, 0}}}};
+            const std::array<std::pair<Vec3, cv::Scalar>, 3> axes = {
+                {{{o.x + 50, o.y, o.z}, {0, 0, 255}}, {{o.x, o.y + 50, o.z}, {0, 200, 0}}, {{o.x, o.y, o.z + 50}, {255, 80, 0}}}};
             for (const auto& [tip, colour] : axes) {
-                cv::line(bgr, fixedPoint(origin), fixedPoint(projector.project(projector.toCamera(tip))), colour, 2,
-                         cv::LINE_AA, kShift);
+                cv::line(bgr, fixedPoint(origin), fixedPoint(projector.project(projector.toCamera(tip))), colour, 2, cv::LINE_AA, kShift);
             }
             if (face.gaze) {
                 // Gaze rays, 60 mm from each eyeball's centre (camera frame directions).
@@ -76,8 +72,8 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result, const std::v
                     const Vec3& d = gaze[e]->direction;
                     const cv::Point3f to = from + 60.f * cv::Point3f(d.x, d.y, d.z);
                     if (from.z <= 0 || to.z <= 0) continue;
-                    cv::line(bgr, fixedPoint(projector.project(from)), fixedPoint(projector.project(to)),
-                             cv::Scalar(255, 255, 0), 2, cv::LINE_AA, kShift);
+                    cv::line(bgr, fixedPoint(projector.project(from)), fixedPoint(projector.project(to)), cv::Scalar(255, 255, 0), 2,
+                             cv::LINE_AA, kShift);
                 }
                 // Pupils: a ring, filled while the eye is open.
                 for (const EyeGaze* g : gaze) {
@@ -92,8 +88,7 @@ void OverlayRenderer::draw(cv::Mat& bgr, const FrameResult& result, const std::v
                 cv::circle(bgr, fixedPoint({p.x, p.y}), 2 << kShift, cv::Scalar(0, 255, 255), -1, cv::LINE_AA, kShift);
             }
         }
-        cv::rectangle(bgr, cv::Point(cvRound(face.box.x0), cvRound(face.box.y0)),
-                      cv::Point(cvRound(face.box.x1), cvRound(face.box.y1)),
+        cv::rectangle(bgr, cv::Point(cvRound(face.box.x0), cvRound(face.box.y0)), cv::Point(cvRound(face.box.x1), cvRound(face.box.y1)),
                       face.tracked ? cv::Scalar(0, 200, 0) : cv::Scalar(0, 140, 255), 1);
     }
 }

@@ -26,9 +26,9 @@ public:
 private:
     MeshPoser poser_;
     std::vector<std::array<int, 3>> face_triangles_;  // skin region only: the rest (eyes, mouth socket, head) clutters
-    int axes_origin_ = 0;                              // vertex the pose axes start from (nose bridge)
-    std::vector<Vec3> mesh_;                           // model frame, reused
-    std::vector<cv::Point3f> camera_;                  // camera frame, reused
+    int axes_origin_ = 0;                             // vertex the pose axes start from (nose bridge)
+    std::vector<Vec3> mesh_;                          // model frame, reused
+    std::vector<cv::Point3f> camera_;                 // camera frame, reused
     cv::Mat layer_;
 };
 

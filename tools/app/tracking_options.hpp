@@ -19,9 +19,9 @@ DetectorConfig detectorConfig(const Args& args);
 /// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --expression-prior F,
 /// --landmark-starts N, --filter-cutoff HZ, --filter-beta B, --cnn FILE|none, --eyes FILE|none, and the flags --no-filter,
 /// --no-cnn-stage.
-inline const std::set<std::string> kTrackerOptions = {"--max-faces", "--fov", "--focal", "--calibration-frames",
-                                                      "--expression-prior", "--landmark-starts", "--filter-cutoff", "--filter-beta",
-                                                      "--cnn", "--eyes"};
+inline const std::set<std::string> kTrackerOptions = {
+    "--max-faces",   "--fov", "--focal", "--calibration-frames", "--expression-prior", "--landmark-starts", "--filter-cutoff",
+    "--filter-beta", "--cnn", "--eyes"};
 inline const std::set<std::string> kTrackerFlags = {"--no-filter", "--no-cnn-stage"};
 /// Every value is checked here (facetrack::validate): commands call it, and load their models,
 /// before they open any input, so that a bad option is the error, not the input.

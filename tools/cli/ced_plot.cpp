@@ -35,8 +35,7 @@ ErrorSummary summarize(std::vector<double> nmes, double maxError) {
     return s;
 }
 
-void writeCedPlot(const std::string& path, const std::vector<CedCurve>& curves, double maxError,
-                  const std::string& title) {
+void writeCedPlot(const std::string& path, const std::vector<CedCurve>& curves, double maxError, const std::string& title) {
     LinePlot plot;
     plot.title = title;
     plot.x_label = "NME (normalised by outer-eye-corner distance)";

@@ -21,7 +21,6 @@ struct CedCurve {
 };
 
 /// Writes a PNG plot with one line per curve. Throws Error when it cannot be written.
-void writeCedPlot(const std::string& path, const std::vector<CedCurve>& curves, double maxError,
-                  const std::string& title);
+void writeCedPlot(const std::string& path, const std::vector<CedCurve>& curves, double maxError, const std::string& title);
 
 }  // namespace facetrack::cli

@@ -66,26 +66,25 @@ int runBench(const std::vector<std::string>& argv) {
     }
 
     const double meanMs = mean(total);
-    std::printf("%s: %zu frames of %dx%d, %.1f fps (mean %.3f ms per frame), a face in %.1f %% of frames\n", clip.c_str(),
-                frames.size(), frames[0].bgr.cols, frames[0].bgr.rows, meanMs > 0 ? 1000.0 / meanMs : 0.0, meanMs,
+    std::printf("%s: %zu frames of %dx%d, %.1f fps (mean %.3f ms per frame), a face in %.1f %% of frames\n", clip.c_str(), frames.size(),
+                frames[0].bgr.cols, frames[0].bgr.rows, meanMs > 0 ? 1000.0 / meanMs : 0.0, meanMs,
                 100.0 * withFace / static_cast<double>(frames.size()));
     std::printf("%-10s %6s %9s %9s %9s\n", "stage", "runs", "mean ms", "p50 ms", "p99 ms");
     for (const auto& stage : stageOrder) {
         const auto& times = perStage[stage];
         const auto runs = std::count_if(times.begin(), times.end(), [](double t) { return t > 0.0; });
-        std::printf("%-10s %6ld %9.3f %9.3f %9.3f\n", stage.c_str(), static_cast<long>(runs), mean(times),
-                    percentile(times, 0.5), percentile(times, 0.99));
+        std::printf("%-10s %6ld %9.3f %9.3f %9.3f\n", stage.c_str(), static_cast<long>(runs), mean(times), percentile(times, 0.5),
+                    percentile(times, 0.99));
     }
-    std::printf("%-10s %6zu %9.3f %9.3f %9.3f\n", "total", total.size(), meanMs, percentile(total, 0.5),
-                percentile(total, 0.99));
+    std::printf("%-10s %6zu %9.3f %9.3f %9.3f\n", "total", total.size(), meanMs, percentile(total, 0.5), percentile(total, 0.99));
     // Tracking mode: frames that neither searched for a face nor calibrated identity (one-off costs).
     std::vector<double> tracking;
     for (std::size_t i = 0; i < total.size(); ++i) {
         const bool oneOff = (perStage.count("detect") && perStage["detect"][i] > 0) || calibratedNow[i];
         if (!oneOff) tracking.push_back(total[i]);
     }
-    std::printf("%-10s %6zu %9.3f %9.3f %9.3f   (frames without detect or calibrate)\n", "tracking", tracking.size(),
-                mean(tracking), percentile(tracking, 0.5), percentile(tracking, 0.99));
+    std::printf("%-10s %6zu %9.3f %9.3f %9.3f   (frames without detect or calibrate)\n", "tracking", tracking.size(), mean(tracking),
+                percentile(tracking, 0.5), percentile(tracking, 0.99));
 
     LinePlot plot;
     plot.title = "facetrack bench: time per frame by stage";

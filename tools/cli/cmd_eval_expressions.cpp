@@ -83,8 +83,7 @@ std::vector<Segment> readLabels(const std::string& path) {
         std::stringstream s(line);
         Segment seg;
         std::string first, last;
-        if (!std::getline(s, seg.clip, ',') || !std::getline(s, first, ',') || !std::getline(s, last, ',') ||
-            !std::getline(s, seg.label))
+        if (!std::getline(s, seg.clip, ',') || !std::getline(s, first, ',') || !std::getline(s, last, ',') || !std::getline(s, seg.label))
             throw Error(path + ":" + std::to_string(number) + ": expected clip,first,last,label");
         seg.first = std::stoi(first);
         seg.last = std::stoi(last);
@@ -132,7 +131,8 @@ std::map<std::string, std::array<float, kArkitBlendshapeCount>> readDenseLabels(
     std::map<std::string, std::array<float, kArkitBlendshapeCount>> out;
     std::vector<float> weights(native.size());
     for (const auto& row : table.rows) {
-        for (std::size_t k = 0; k < native.size(); ++k) weights[k] = column[k] < 0 ? 0.f : static_cast<float>(row.values[static_cast<std::size_t>(column[k])]);
+        for (std::size_t k = 0; k < native.size(); ++k)
+            weights[k] = column[k] < 0 ? 0.f : static_cast<float>(row.values[static_cast<std::size_t>(column[k])]);
         out[row.key] = model.toArkit(weights);
     }
     return out;
@@ -169,9 +169,11 @@ void barPlot(const std::string& path, const std::array<double, kArkitBlendshapeC
     for (int i = 0; i < kArkitBlendshapeCount; ++i) {
         const int x0 = left + static_cast<int>(i * step) + 2, x1 = left + static_cast<int>((i + 1) * step) - 2;
         const int y = h - bottom - static_cast<int>(std::clamp(values[static_cast<std::size_t>(i)], 0.0, 1.0) * scale);
-        cv::rectangle(img, {x0, y}, {x1, h - bottom}, values[static_cast<std::size_t>(i)] > 0.1 ? cv::Scalar(40, 40, 220) : cv::Scalar(200, 120, 40), -1);
+        cv::rectangle(img, {x0, y}, {x1, h - bottom},
+                      values[static_cast<std::size_t>(i)] > 0.1 ? cv::Scalar(40, 40, 220) : cv::Scalar(200, 120, 40), -1);
         cv::Mat text(12, 140, CV_8UC3, cv::Scalar(255, 255, 255));
-        cv::putText(text, std::string(arkitNames()[static_cast<std::size_t>(i)]), {0, 10}, cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+        cv::putText(text, std::string(arkitNames()[static_cast<std::size_t>(i)]), {0, 10}, cv::FONT_HERSHEY_SIMPLEX, 0.35,
+                    cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
         cv::Mat rotated;
         cv::rotate(text, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
         const int cx = (x0 + x1) / 2 - 6;
@@ -200,7 +202,8 @@ NeutralFigures reportSegments(const std::vector<Segment>& segments, const std::m
         for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
             if (!t.arkit[static_cast<std::size_t>(f)]) continue;
             if (calibrating.count(s.clip) && f <= calibrating.at(s.clip)->first) continue;  // the calibration frame (and before)
-            for (int k = 0; k < kArkitBlendshapeCount; ++k) neutral[static_cast<std::size_t>(k)] += (*t.arkit[static_cast<std::size_t>(f)])[static_cast<std::size_t>(k)];
+            for (int k = 0; k < kArkitBlendshapeCount; ++k)
+                neutral[static_cast<std::size_t>(k)] += (*t.arkit[static_cast<std::size_t>(f)])[static_cast<std::size_t>(k)];
             figures.byYaw.push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *t.arkit[static_cast<std::size_t>(f)]});
             ++neutralFrames;
         }
@@ -280,8 +283,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     const std::string shared = core::sharedDirectory();
     if (shared.empty()) throw Error("../shared not found: the clips live there");
     // The repository's labels: from the working directory, or beside the models/ folder in use.
-    const std::string defaultLabels =
-        core::firstExistingFile({"data/expression_labels.csv", modelDirectory() + "/../data/expression_labels.csv"});
+    const std::string defaultLabels = core::firstExistingFile(
+        {"data/expression_labels.csv", modelDirectory() + "/../data/expression_labels.csv"});
     const auto segments = readLabels(args.get("--labels", defaultLabels.empty() ? "data/expression_labels.csv" : defaultLabels));
     std::vector<std::string> clips = args.positional();
     if (clips.empty()) {
@@ -315,7 +318,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
         tracks[clip] = trackClip(paths[clip], models, config, false, at);
         if (!args.has("--no-mirror")) mirrored[clip] = trackClip(paths[clip], models, config, true, at);
     }
-    if (calibrate) std::printf("neutral calibrated at the first frame of each clip's first neutral segment (%zu clips)\n", calibrating.size());
+    if (calibrate)
+        std::printf("neutral calibrated at the first frame of each clip's first neutral segment (%zu clips)\n", calibrating.size());
     const auto neutralFigures = reportSegments(segments, tracks, calibrating);
     const auto& neutral = neutralFigures.mean;
     // Mirror consistency: the mirrored clip's right shape against the clip's left shape.
@@ -344,7 +348,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     for (const auto& [yaw, a] : neutralFigures.byYaw) {
         const int bin = std::min(2, static_cast<int>(yaw / 10.f));
         if (yaw > 30.f) continue;
-        for (int k = 0; k < kArkitBlendshapeCount; ++k) byBin[static_cast<std::size_t>(bin)][static_cast<std::size_t>(k)] += a[static_cast<std::size_t>(k)];
+        for (int k = 0; k < kArkitBlendshapeCount; ++k)
+            byBin[static_cast<std::size_t>(bin)][static_cast<std::size_t>(k)] += a[static_cast<std::size_t>(k)];
         ++binFrames[static_cast<std::size_t>(bin)];
     }
     double drift = 0;
@@ -355,7 +360,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
         double lo = 1e9, hi = -1e9;
         for (int b = 0; b < 3; ++b) {
             if (binFrames[static_cast<std::size_t>(b)] < 10) continue;
-            const double m = byBin[static_cast<std::size_t>(b)][static_cast<std::size_t>(k)] / static_cast<double>(binFrames[static_cast<std::size_t>(b)]);
+            const double m = byBin[static_cast<std::size_t>(b)][static_cast<std::size_t>(k)] /
+                             static_cast<double>(binFrames[static_cast<std::size_t>(b)]);
             lo = std::min(lo, m), hi = std::max(hi, m);
         }
         if (hi - lo > drift) drift = hi - lo, driftShape = std::string(arkitNames()[static_cast<std::size_t>(k)]);
@@ -377,8 +383,8 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
             }
         }
         std::printf("dense teacher labels (%zu frames), Pearson r per shape (target >= 0.8 for the marked *):\n ", ours[0].size());
-        const std::vector<std::string> targets = {"jawOpen", "mouthSmileLeft", "mouthSmileRight", "mouthPucker", "mouthFunnel",
-                                                  "browInnerUp", "browDownLeft", "browDownRight"};
+        const std::vector<std::string> targets = {"jawOpen",     "mouthSmileLeft", "mouthSmileRight", "mouthPucker",
+                                                  "mouthFunnel", "browInnerUp",    "browDownLeft",    "browDownRight"};
         int column = 0;
         for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
             const std::string name(arkitNames()[k]);

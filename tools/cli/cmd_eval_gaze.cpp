@@ -33,7 +33,8 @@ namespace facetrack::cli {
 
 namespace {
 
-const char* kUsage = R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [--bare-faces] [tracker options]
+const char* kUsage =
+    R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [--bare-faces] [tracker options]
 The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, not ground truth):
   pupil    pupil centre vs the teacher's iris centre, open eyes only (aperture >= 0.8 of the
            clip's median), over the outer-eye-corner distance: mean and p95
@@ -118,10 +119,11 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
     pupilErrors.insert(pupilErrors.end(), clipPupil.begin(), clipPupil.end());
     if (events > 0) eventsFound.push_back(static_cast<double>(found) / events);
     if (open > 0) openAsClosed.push_back(static_cast<double>(openClosed) / open);
-    std::printf("  %-44s pupil error mean %.4f p95 %.4f (%zu open eyes); blink events %ld, found %ld (recall %.2f); "
-                "open frames read as closed %.2f %% (%ld of %ld)\n",
-                clip.c_str(), mean(clipPupil), percentile(clipPupil, 0.95), clipPupil.size(), events, found,
-                events ? static_cast<double>(found) / events : std::nan(""), open ? 100.0 * openClosed / open : 0.0, openClosed, open);
+    std::printf(
+        "  %-44s pupil error mean %.4f p95 %.4f (%zu open eyes); blink events %ld, found %ld (recall %.2f); "
+        "open frames read as closed %.2f %% (%ld of %ld)\n",
+        clip.c_str(), mean(clipPupil), percentile(clipPupil, 0.95), clipPupil.size(), events, found,
+        events ? static_cast<double>(found) / events : std::nan(""), open ? 100.0 * openClosed / open : 0.0, openClosed, open);
 }
 
 void eval300W(const std::string& shared, tools::Split split, const Models& models, const TrackerConfig& config) {
@@ -157,7 +159,8 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
                 const int o = gaze::outerCorner(e), i = gaze::innerCorner(e);
                 const double ax = truth(0, i) - truth(0, o), ay = truth(1, i) - truth(1, o);
                 const auto alongTheEye = [&](Point2 outer, Point2 inner) {
-                    const double dx = 0.5 * (outer.x + inner.x - truth(0, o) - truth(0, i)), dy = 0.5 * (outer.y + inner.y - truth(1, o) - truth(1, i));
+                    const double dx = 0.5 * (outer.x + inner.x - truth(0, o) - truth(0, i)),
+                                 dy = 0.5 * (outer.y + inner.y - truth(1, o) - truth(1, i));
                     return 100.0 * std::fabs(dx * ax + dy * ay) / std::hypot(ax, ay) / iod;
                 };
                 cornerErrors.push_back(alongTheEye(l[o], l[i]));
@@ -180,18 +183,21 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
             errors.push_back(std::hypot(p.x - c.x, p.y - c.y) / corners);
             // The signed difference in the eye's own frame: towards the nose, and up.
             // Image y points down; the left eye's corner axis points the other way along x.
-            const Point2 outer = l[static_cast<std::size_t>(gaze::outerCorner(e))], inner = l[static_cast<std::size_t>(gaze::innerCorner(e))];
+            const Point2 outer = l[static_cast<std::size_t>(gaze::outerCorner(e))],
+                         inner = l[static_cast<std::size_t>(gaze::innerCorner(e))];
             const double ux = inner.x - outer.x, uy = inner.y - outer.y, n = std::hypot(ux, uy);
             towardsNose.push_back(((p.x - c.x) * ux + (p.y - c.y) * uy) / n / corners);
             up.push_back(((p.x - c.x) * uy - (p.y - c.y) * ux) / n / corners * (e == gaze::Eye::Left ? -1.0 : 1.0));
         }
     }
-    std::printf("300-W %s: pupil error mean %.4f p95 %.4f outer-eye-corner distances (%zu open eyes of %zu faces); "
-                "eye-corner midpoint along the eye, against the annotation, mean %.2f %% of the inter-ocular distance "
-                "(landmarks), %.2f %% (corner cascade)\n",
-                split == tools::Split::Test ? "test" : "validation", mean(errors), percentile(errors, 0.95), errors.size(),
-                faces.size(), mean(cornerErrors), mean(refinedErrors));
-    std::printf("  our pupil minus the teacher's, mean: towards the nose %+.4f, up %+.4f outer-eye-corner distances\n", mean(towardsNose), mean(up));
+    std::printf(
+        "300-W %s: pupil error mean %.4f p95 %.4f outer-eye-corner distances (%zu open eyes of %zu faces); "
+        "eye-corner midpoint along the eye, against the annotation, mean %.2f %% of the inter-ocular distance "
+        "(landmarks), %.2f %% (corner cascade)\n",
+        split == tools::Split::Test ? "test" : "validation", mean(errors), percentile(errors, 0.95), errors.size(), faces.size(),
+        mean(cornerErrors), mean(refinedErrors));
+    std::printf("  our pupil minus the teacher's, mean: towards the nose %+.4f, up %+.4f outer-eye-corner distances\n", mean(towardsNose),
+                mean(up));
 }
 
 }  // namespace
@@ -218,9 +224,10 @@ int runEvalGaze(const std::vector<std::string>& argv) {
         std::vector<double> pupil, recall, openClosed;
         std::printf("clips (teacher: MediaPipe iris + eyelids):\n");
         for (const auto& clip : clips) evalClip(shared, clip, teacher, models, config, pupil, recall, openClosed);
-        std::printf("clips together: pupil error mean %.4f p95 %.4f; blink recall (mean over clips) %.2f; "
-                    "open frames read as closed %.2f %%\n",
-                    mean(pupil), percentile(pupil, 0.95), mean(recall), 100.0 * mean(openClosed));
+        std::printf(
+            "clips together: pupil error mean %.4f p95 %.4f; blink recall (mean over clips) %.2f; "
+            "open frames read as closed %.2f %%\n",
+            mean(pupil), percentile(pupil, 0.95), mean(recall), 100.0 * mean(openClosed));
     }
     if (split != "none") eval300W(shared, tools::parseSplit(split), models, config);
     if (synthetic > 0) evalSyntheticGaze(synthetic, models, config, args.has("--bare-faces"));

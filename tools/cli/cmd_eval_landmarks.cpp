@@ -117,18 +117,18 @@ struct Method {
     std::string name;
     std::function<Shape2(const cv::Mat& bgr, const cv::Mat& gray, const Box& box)> fit;
     std::vector<double> nmes{};
-    std::array<std::vector<double>, kYawBins> box_nmes_by_yaw{};  ///< with poses.csv: per |yaw| bin, NME over sqrt(box)
+    std::array<std::vector<double>, kYawBins> box_nmes_by_yaw{};    ///< with poses.csv: per |yaw| bin, NME over sqrt(box)
     std::array<double, std::size(core::kRegions68)> region_sums{};  ///< per region, the sum over faces of its mean point error
     double ms = 0.0;
 
-    Method(std::string n, std::function<Shape2(const cv::Mat&, const cv::Mat&, const Box&)> f)
-        : name(std::move(n)), fit(std::move(f)) {}
+    Method(std::string n, std::function<Shape2(const cv::Mat&, const cv::Mat&, const Box&)> f) : name(std::move(n)), fit(std::move(f)) {}
 };
 
 Method ourLbf(std::shared_ptr<const LandmarkModel> model, int starts) {
     return {"facetrack LBF, " + std::to_string(starts) + (starts == 1 ? " start" : " starts"),
             [model, starts](const cv::Mat&, const cv::Mat& gray, const Box& box) {
-                return Shape2(landmarks::alignFromStarts(model::dataOf(*model), gray, landmarks::shapeFromBox(model::dataOf(*model), box, "yunet"), starts));
+                return Shape2(landmarks::alignFromStarts(model::dataOf(*model), gray,
+                                                         landmarks::shapeFromBox(model::dataOf(*model), box, "yunet"), starts));
             }};
 }
 
@@ -165,8 +165,8 @@ Method facemarkLbf(const std::string& path) {
     cv::Ptr<cv::face::FacemarkLBF> facemark = cv::face::FacemarkLBF::create(params);
     facemark->loadModel(path);
     return {"OpenCV FacemarkLBF", [facemark](const cv::Mat& bgr, const cv::Mat&, const Box& box) {
-                std::vector<cv::Rect> faces = {cv::Rect(cv::Point(cvRound(box.x0), cvRound(box.y0)),
-                                                        cv::Point(cvRound(box.x1), cvRound(box.y1)))};
+                std::vector<cv::Rect> faces = {
+                    cv::Rect(cv::Point(cvRound(box.x0), cvRound(box.y0)), cv::Point(cvRound(box.x1), cvRound(box.y1)))};
                 std::vector<std::vector<cv::Point2f>> points;
                 if (!facemark->fit(bgr, faces, points) || points.empty() || points[0].size() != 68) {
                     throw Error("FacemarkLBF failed to fit a face");
@@ -184,7 +184,8 @@ Method dlibShapePredictor(const std::string& path, bool seenInTraining) {
     } catch (const std::exception& e) {
         throw Error("cannot load dlib model '" + path + "': " + e.what());
     }
-    return {std::string("dlib shape_predictor") + (seenInTraining ? " (seen in training)" : ""), [predictor](const cv::Mat&, const cv::Mat& gray, const Box& box) {
+    return {std::string("dlib shape_predictor") + (seenInTraining ? " (seen in training)" : ""),
+            [predictor](const cv::Mat&, const cv::Mat& gray, const Box& box) {
                 const dlib::cv_image<unsigned char> image(gray);
                 const dlib::full_object_detection d = (*predictor)(
                     image, dlib::rectangle(std::lround(box.x0), std::lround(box.y0), std::lround(box.x1), std::lround(box.y1)));
@@ -253,8 +254,9 @@ void writePointsRow(std::ofstream& out, const std::string& image, const std::str
 }  // namespace
 
 int runEvalLandmarks(const std::vector<std::string>& argv) {
-    const Args args(argv, {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts",
-                                 "--tracked-frames", "--points-out", "--poses"},
+    const Args args(argv,
+                    {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts",
+                     "--tracked-frames", "--points-out", "--poses"},
                     {"--help", "--lbf-only", "--sequences"});
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -290,7 +292,8 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     if (starts != 1) methods.push_back(ourLbf(lbf, 1));
     if (args.has("--facemark")) methods.push_back(facemarkLbf(args.get("--facemark")));
     const std::string dlibPath = args.get("--dlib", "/usr/share/dlib/shape_predictor_68_face_landmarks.dat");
-    if (args.has("--dlib") && dlibPath != "none" && !fs::exists(dlibPath)) throw Error("no dlib model '" + dlibPath + "' (--dlib none skips dlib)");
+    if (args.has("--dlib") && dlibPath != "none" && !fs::exists(dlibPath))
+        throw Error("no dlib model '" + dlibPath + "' (--dlib none skips dlib)");
     if (dlibPath != "none" && fs::exists(dlibPath)) {
         // dlib's model was trained on the 300-W training images; only the common test set is new to it.
         const bool seen = !args.has("--split") || args.get("--split") != "test";
@@ -379,14 +382,15 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     followed.endClip();
 
     std::printf("%zu faces, %d without a YuNet box (left out)\n", faces.size(), missed);
-    if (pipeline->usesPipeline()) std::printf("%s: %d faces dropped by the fit (LBF's landmarks kept)\n", pipeline->method().c_str(), dropped);
+    if (pipeline->usesPipeline())
+        std::printf("%s: %d faces dropped by the fit (LBF's landmarks kept)\n", pipeline->method().c_str(), dropped);
     if (trackedFrames > 0) std::printf("facetrack tracked: %d faces dropped by the tracker (LBF's landmarks kept)\n", trackedDropped);
     std::printf("%-40s %6s %9s %9s %10s %9s %9s\n", "method", "faces", "mean NME", "median", "fail@8%", "AUC@8%", "ms/face");
     std::vector<CedCurve> curves;
     for (const auto& m : methods) {
         const ErrorSummary s = summarize(m.nmes, maxError);
-        std::printf("%-40s %6zu %8.2f%% %8.2f%% %9.2f%% %9.4f %9.3f\n", m.name.c_str(), m.nmes.size(), 100 * s.mean,
-                    100 * s.median, 100 * s.failure_rate, s.auc, m.ms / std::max<std::size_t>(1, m.nmes.size()));
+        std::printf("%-40s %6zu %8.2f%% %8.2f%% %9.2f%% %9.4f %9.3f\n", m.name.c_str(), m.nmes.size(), 100 * s.mean, 100 * s.median,
+                    100 * s.failure_rate, s.auc, m.ms / std::max<std::size_t>(1, m.nmes.size()));
         char label[160];
         std::snprintf(label, sizeof label, "%s: mean %.2f%%, AUC %.3f", m.name.c_str(), 100 * s.mean, s.auc);
         curves.push_back({label, m.nmes});
@@ -413,32 +417,36 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
         const int without = std::accumulate(followed.without_face.begin(), followed.without_face.end(), 0);
         std::vector<double> all;
         for (const auto& bin : followed.box_nmes) all.insert(all.end(), bin.begin(), bin.end());
-        std::printf("\n%s followed through each folder's frames (--sequences): %d frames, %.2f ms a frame, no face on %d (%.1f %%),"
-                    " box NME %.2f %% where it follows one\n",
-                    pipeline->method().c_str(), frames, followed.ms / std::max(1, frames), without, 100.0 * without / std::max(1, frames),
-                    all.empty() ? 0.0 : 100.0 * std::accumulate(all.begin(), all.end(), 0.0) / static_cast<double>(all.size()));
+        std::printf(
+            "\n%s followed through each folder's frames (--sequences): %d frames, %.2f ms a frame, no face on %d (%.1f %%),"
+            " box NME %.2f %% where it follows one\n",
+            pipeline->method().c_str(), frames, followed.ms / std::max(1, frames), without, 100.0 * without / std::max(1, frames),
+            all.empty() ? 0.0 : 100.0 * std::accumulate(all.begin(), all.end(), 0.0) / static_cast<double>(all.size()));
         if (!poses.empty()) {
             printBins("by |yaw|: box NME (frames followed)", followed.box_nmes, true);
             std::printf("%-40s", "by |yaw|: frames without a face");
-            for (std::size_t b = 0; b < kYawBins; ++b) std::printf("  %-14s", (std::to_string(followed.without_face[b]) + " of " + std::to_string(followed.frames[b])).c_str());
+            for (std::size_t b = 0; b < kYawBins; ++b)
+                std::printf("  %-14s", (std::to_string(followed.without_face[b]) + " of " + std::to_string(followed.frames[b])).c_str());
             std::putchar('\n');
             printBins("by |yaw|: head yaw error, offset removed", followed.yaw_errors, false);
             std::vector<double> offsets = followed.offsets;
             std::sort(offsets.begin(), offsets.end());
             if (!offsets.empty()) {
-                std::printf("(the yaw error: |yaw - poses.csv's yaw - each clip's median difference|; the median differences of the %zu clips"
-                            " lie in %.1f .. %.1f deg, median %.1f)\n",
-                            offsets.size(), offsets.front(), offsets.back(), offsets[offsets.size() / 2]);
-            if (const double slope = leastSquaresLine(followed.turn_label, followed.turn_yaw).slope; std::isfinite(slope))
-                std::printf("the tracker's yaw turns %.3f deg per degree of poses.csv's within each clip"
-                            " (least squares over the frames followed)\n", slope);
+                std::printf(
+                    "(the yaw error: |yaw - poses.csv's yaw - each clip's median difference|; the median differences of the %zu clips"
+                    " lie in %.1f .. %.1f deg, median %.1f)\n",
+                    offsets.size(), offsets.front(), offsets.back(), offsets[offsets.size() / 2]);
+                if (const double slope = leastSquaresLine(followed.turn_label, followed.turn_yaw).slope; std::isfinite(slope))
+                    std::printf(
+                        "the tracker's yaw turns %.3f deg per degree of poses.csv's within each clip"
+                        " (least squares over the frames followed)\n",
+                        slope);
             }
         }
     }
     if (pointsOut.is_open()) std::printf("points: %s\n", args.get("--points-out").c_str());
     if (args.has("--plot")) {
-        writeCedPlot(args.get("--plot"), curves, maxError,
-                     "CED, " + (args.has("--split") ? args.get("--split") + " split" : dir));
+        writeCedPlot(args.get("--plot"), curves, maxError, "CED, " + (args.has("--split") ? args.get("--split") + " split" : dir));
         std::printf("CED plot: %s\n", args.get("--plot").c_str());
     }
     return 0;

@@ -178,8 +178,9 @@ int runEvalTrack(const std::vector<std::string>& argv) {
     for (const auto& clip : args.positional()) {
         const auto frames = readAllFrames(clip, maxFrames, size);
         // --size letterboxes: the teacher saw the clip's own frames.
-        const TeacherTrack teacher = meshes && size.empty() ? teacherTrack(*meshes, std::filesystem::path(clip).filename().string(), frames.size())
-                                                     : TeacherTrack{};
+        const TeacherTrack teacher = meshes && size.empty()
+                                         ? teacherTrack(*meshes, std::filesystem::path(clip).filename().string(), frames.size())
+                                         : TeacherTrack{};
         std::printf("%s (%zu frames, %dx%d)\n", clip.c_str(), frames.size(), frames[0].bgr.cols, frames[0].bgr.rows);
 
         Tracker tracker(models, config);

@@ -120,8 +120,8 @@ int runSend(const std::vector<std::string>& argv) {
     std::fprintf(stderr,
                  "facetrack send: %ld frames sent (a face in %ld) in %.1f s, %ld datagrams, %ld bytes, %ld not sent; "
                  "read %ld, dropped %ld; capture to sent p50 %.2f ms, p99 %.2f ms; CPU %.0f %% of one core\n",
-                 s.frames, withFace, wall, s.datagrams, s.bytes, s.failed, t.frames_read, t.frames_dropped,
-                 percentile(latencyMs, 0.5), percentile(latencyMs, 0.99), wall > 0 ? 100.0 * (cpuSeconds() - cpuStart) / wall : 0.0);
+                 s.frames, withFace, wall, s.datagrams, s.bytes, s.failed, t.frames_read, t.frames_dropped, percentile(latencyMs, 0.5),
+                 percentile(latencyMs, 0.99), wall > 0 ? 100.0 * (cpuSeconds() - cpuStart) / wall : 0.0);
     if (!t.error.empty()) throw Error(t.error);
     return 0;
 }

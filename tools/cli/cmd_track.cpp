@@ -46,9 +46,7 @@ Json vec3(const Vec3& v) { return {v.x, v.y, v.z}; }
 Json poseJson(const std::optional<HeadPose>& pose) {
     if (!pose) return nullptr;
     const auto& q = pose->rotation;
-    return {{"quaternion", {q.w, q.x, q.y, q.z}},
-            {"euler_deg", vec3(pose->euler_deg)},
-            {"translation_mm", vec3(pose->translation_mm)}};
+    return {{"quaternion", {q.w, q.x, q.y, q.z}}, {"euler_deg", vec3(pose->euler_deg)}, {"translation_mm", vec3(pose->translation_mm)}};
 }
 
 Json blendshapesJson(const std::optional<ExpressionResult>& expression) {
@@ -58,9 +56,7 @@ Json blendshapesJson(const std::optional<ExpressionResult>& expression) {
     return out;
 }
 
-Json landmarksOrNull(const std::optional<Landmarks68>& landmarks) {
-    return landmarks ? landmarksJson(*landmarks) : Json(nullptr);
-}
+Json landmarksOrNull(const std::optional<Landmarks68>& landmarks) { return landmarks ? landmarksJson(*landmarks) : Json(nullptr); }
 
 Json faceJson(const FaceResult& face, bool raw) {
     Json j = {{"id", face.id},
@@ -75,12 +71,9 @@ Json faceJson(const FaceResult& face, bool raw) {
               {"identity_calibrated", face.identity_calibrated}};
     if (face.gaze) {
         auto eye = [](const EyeGaze& e) {
-            return Json{{"vector", vec3(e.direction)},
-                        {"vector_head", vec3(e.direction_head)},
-                        {"yaw_deg", round2(e.yaw_deg)},
-                        {"pitch_deg", round2(e.pitch_deg)},
-                        {"openness", round2(e.openness)},
-                        {"pupil", {round2(e.pupil_px.x), round2(e.pupil_px.y)}}};
+            return Json{{"vector", vec3(e.direction)},    {"vector_head", vec3(e.direction_head)},
+                        {"yaw_deg", round2(e.yaw_deg)},   {"pitch_deg", round2(e.pitch_deg)},
+                        {"openness", round2(e.openness)}, {"pupil", {round2(e.pupil_px.x), round2(e.pupil_px.y)}}};
         };
         j["gaze"] = {{"left", eye(face.gaze->left)}, {"right", eye(face.gaze->right)}};
     }
@@ -136,8 +129,9 @@ MediaReader openInput(const Args& args, std::string& name) {
             return MediaReader::open(clip);
         }
     }
-    throw Error("no input: no webcam (/dev/video*) and no ../shared/data/clips. "
-                "Pass a clip ('facetrack track my_clip.mp4') or a camera ('--camera /dev/video0').");
+    throw Error(
+        "no input: no webcam (/dev/video*) and no ../shared/data/clips. "
+        "Pass a clip ('facetrack track my_clip.mp4') or a camera ('--camera /dev/video0').");
 }
 
 }  // namespace

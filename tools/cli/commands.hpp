@@ -39,17 +39,17 @@ inline std::string clipPath(const std::string& shared, const std::string& clip) 
 // The tools' shared pieces, by their short names.
 using tools::Args;
 using tools::detectorConfig;
+using tools::isImageFile;
 using tools::kDetectorOptions;
-using tools::trackingFlags;
 using tools::kTrackerOptions;
-using tools::trackerConfig;
-using tools::trackingOptions;
+using tools::listImages;
 using tools::MediaFrame;
 using tools::MediaReader;
 using tools::OverlayRenderer;
-using tools::isImageFile;
-using tools::listImages;
 using tools::parseSize;
 using tools::readAllFrames;
+using tools::trackerConfig;
+using tools::trackingFlags;
+using tools::trackingOptions;
 
 }  // namespace facetrack::cli

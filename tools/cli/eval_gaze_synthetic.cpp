@@ -29,7 +29,6 @@ namespace facetrack::cli {
 namespace {
 constexpr float kDeg = 3.14159265358979f / 180.f;
 
-
 /// Camera-from-model of a head turned by (yaw, pitch, roll) degrees from
 /// facing the camera (yaw > 0 to the subject's left, pitch > 0 down as in HeadPose).
 Quaternion headRotation(float yaw, float pitch, float roll) {
@@ -76,7 +75,8 @@ public:
         cv::Mat gray;
         cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
         const Landmarks68 landmarks = renderer.landmarks(f);
-        const Eigen::Matrix3f R = Eigen::Quaternionf(f.rotation.w, f.rotation.x, f.rotation.y, f.rotation.z).normalized().toRotationMatrix();
+        const Eigen::Matrix3f R =
+            Eigen::Quaternionf(f.rotation.w, f.rotation.x, f.rotation.y, f.rotation.z).normalized().toRotationMatrix();
         const Eigen::Vector3f t(f.translation_mm.x, f.translation_mm.y, f.translation_mm.z);
         core::Camera camera;
         camera.fx = f.fx, camera.fy = f.fy, camera.cx = f.cx, camera.cy = f.cy;
@@ -87,12 +87,13 @@ public:
         for (std::size_t e = 0; e < 2; ++e) {
             Eye& eye = eyes_seen_[e];
             gaze::cutEyePatch(gray, landmarks, e == 0 ? gaze::Eye::Left : gaze::Eye::Right, eye.patch);
-            const Eigen::Vector3f centre =
-                R * gaze::rotationCentre(e == 0 ? face_->leftEyeball() : face_->rightEyeball(), rigs_[e].centre(mesh)) + t;
+            const Eigen::Vector3f centre = R * gaze::rotationCentre(e == 0 ? face_->leftEyeball() : face_->rightEyeball(),
+                                                                    rigs_[e].centre(mesh)) +
+                                           t;
             for (int y = 0; y < gaze::kClassifiedRegion.rows(); ++y)
                 for (int x = 0; x < gaze::kClassifiedRegion.columns(); ++x) {
-                    const Point2 p = gaze::toImage(eye.patch, {static_cast<float>(gaze::kClassifiedRegion.x(x)),
-                                                               static_cast<float>(gaze::kClassifiedRegion.y(y))});
+                    const Point2 p = gaze::toImage(
+                        eye.patch, {static_cast<float>(gaze::kClassifiedRegion.x(x)), static_cast<float>(gaze::kClassifiedRegion.y(y))});
                     const int px = std::clamp(static_cast<int>(std::lround(p.x)), 0, classes.cols - 1);
                     const int py = std::clamp(static_cast<int>(std::lround(p.y)), 0, classes.rows - 1);
                     const int c = classes.at<std::uint8_t>(py, px);
@@ -106,14 +107,17 @@ public:
             open[e] = &eye.open;
         }
         if (net_) gaze::classifyByNet(model::dataOf(*eyes_), *net_, patches, iris, open);
-        else for (std::size_t e = 0; e < 2; ++e) gaze::classifyByForest(model::dataOf(*eyes_), eyes_seen_[e].patch.pixels, padded_, eyes_seen_[e].iris, eyes_seen_[e].open);
+        else
+            for (std::size_t e = 0; e < 2; ++e)
+                gaze::classifyByForest(model::dataOf(*eyes_), eyes_seen_[e].patch.pixels, padded_, eyes_seen_[e].iris, eyes_seen_[e].open);
         std::array<std::array<double, 2>, 2> out{};
         const gaze::GazeAngles none{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
         for (int k = 0; k < 2; ++k) {
             const gaze::GazeAngles a = gaze::fitGaze(k == 0 ? exact : classified, R, camera, none, false);
             for (int e = 0; e < 2; ++e) {
                 const Eigen::Vector3f d = R * gaze::gazeDirection(a[static_cast<std::size_t>(e)].x(), a[static_cast<std::size_t>(e)].y());
-                out[static_cast<std::size_t>(k)][static_cast<std::size_t>(e)] = angleDeg({d.x(), d.y(), d.z()}, renderer.gazeInCamera(f, e));
+                out[static_cast<std::size_t>(k)][static_cast<std::size_t>(e)] = angleDeg({d.x(), d.y(), d.z()},
+                                                                                         renderer.gazeInCamera(f, e));
             }
         }
         return out;
@@ -183,9 +187,10 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
         for (double x : v) s += (x - m) * (x - m);
         return v.empty() ? std::nan("") : std::sqrt(s / static_cast<double>(v.size()));
     };
-    std::printf("  fixation, inter-ocular 80 px, 50 frames of pixel noise after 60 of warm-up: gaze standard deviation yaw %.2f, pitch %.2f deg "
-                "(in the camera frame: %.2f, %.2f)\n",
-                deviation(yaw), deviation(pitch), deviation(cameraYaw), deviation(cameraPitch));
+    std::printf(
+        "  fixation, inter-ocular 80 px, 50 frames of pixel noise after 60 of warm-up: gaze standard deviation yaw %.2f, pitch %.2f deg "
+        "(in the camera frame: %.2f, %.2f)\n",
+        deviation(yaw), deviation(pitch), deviation(cameraYaw), deviation(cameraPitch));
     // A 20-degree saccade: frames until within 2 degrees of the new gaze's estimate at rest.
     tracker.reset();
     for (int i = 0; i < 10; ++i) step(sequenceFace(model, 80, -10, 0, 0, 0, 200u + static_cast<unsigned>(i)));
@@ -236,11 +241,13 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
             const float pitch = i < ahead ? 0.f : -25.f;
             const FaceResult* f = step(sequenceFace(model, 80, 0, pitch, 0, 0, 500u + static_cast<unsigned>(i)));
             double& largest = downBlink[ahead == 0 ? 0 : 1];
-            if (f && i >= ahead + 5) largest = std::max(largest, static_cast<double>(std::max(blinkOf(*f, "eyeBlinkLeft"), blinkOf(*f, "eyeBlinkRight"))));
+            if (f && i >= ahead + 5)
+                largest = std::max(largest, static_cast<double>(std::max(blinkOf(*f, "eyeBlinkLeft"), blinkOf(*f, "eyeBlinkRight"))));
         }
     }
-    std::printf("  looking down 25 deg: largest eyeBlink %.2f from the first frame, %.2f after 60 frames looking ahead (a blink is >= 0.5)\n",
-                downBlink[0], downBlink[1]);
+    std::printf(
+        "  looking down 25 deg: largest eyeBlink %.2f from the first frame, %.2f after 60 frames looking ahead (a blink is >= 0.5)\n",
+        downBlink[0], downBlink[1]);
     // The same over other faces: inter-ocular 50 / 90 / 120 px, the head turned 0 or 20 degrees,
     // after 20 or 60 frames looking ahead; the largest eyeBlink from the fourth frame looking down.
     int blinks = 0, settings = 0;
@@ -255,22 +262,26 @@ void evalSyntheticSequences(const tools::SyntheticRenderer& renderer, Tracker& t
                     f.rotation = headRotation(headYaw, 0, 0);
                     const FaceResult* r = step(f);
                     if (r && i >= ahead + 3)
-                        largest = std::max(largest, static_cast<double>(std::max(blinkOf(*r, "eyeBlinkLeft"), blinkOf(*r, "eyeBlinkRight"))));
+                        largest = std::max(largest,
+                                           static_cast<double>(std::max(blinkOf(*r, "eyeBlinkLeft"), blinkOf(*r, "eyeBlinkRight"))));
                 }
                 ++settings;
                 blinks += largest >= 0.5;
                 worst = std::max(worst, largest);
             }
-    std::printf("  looking down 25 deg, inter-ocular 50 / 90 / 120 px, head turned 0 / 20 deg, after 20 / 60 frames ahead: "
-                "%d of %d read as a blink (largest eyeBlink %.2f)\n", blinks, settings, worst);
+    std::printf(
+        "  looking down 25 deg, inter-ocular 50 / 90 / 120 px, head turned 0 / 20 deg, after 20 / 60 frames ahead: "
+        "%d of %d read as a blink (largest eyeBlink %.2f)\n",
+        blinks, settings, worst);
     // A wink: the left eye closed, the right open.
     tracker.reset();
     double openRight = 1, blinkLeft = 0;
     for (int i = 0; i < 15; ++i) {
         const bool wink = i >= 8;
         const FaceResult* f = step(sequenceFace(model, 80, 0, 0, wink ? 1.f : 0.f, 0, 600u + static_cast<unsigned>(i)));
-        if (f && wink) openRight = std::min(openRight, static_cast<double>(f->gaze->right.openness)),
-                       blinkLeft = std::max(blinkLeft, static_cast<double>(blinkOf(*f, "eyeBlinkLeft")));
+        if (f && wink)
+            openRight = std::min(openRight, static_cast<double>(f->gaze->right.openness)),
+            blinkLeft = std::max(blinkLeft, static_cast<double>(blinkOf(*f, "eyeBlinkLeft")));
     }
     std::printf("  wink (left eye closed): left eyeBlink up to %.2f, right eye openness at least %.2f\n", blinkLeft, openRight);
 }
@@ -328,9 +339,10 @@ void evalSyntheticTracked(int heads, const tools::SyntheticRenderer& renderer, T
             }
         }
     }
-    std::printf("  tracked (%d heads held still 30 frames, a new gaze every 5; the last frame of each fixation after 15 frames):"
-                " angular error mean %.2f p95 %.2f deg; by inter-ocular 40-60 / 60-80 / 80-100 / 100-120 px, mean",
-                heads, mean(all), percentile(all, 0.95));
+    std::printf(
+        "  tracked (%d heads held still 30 frames, a new gaze every 5; the last frame of each fixation after 15 frames):"
+        " angular error mean %.2f p95 %.2f deg; by inter-ocular 40-60 / 60-80 / 80-100 / 100-120 px, mean",
+        heads, mean(all), percentile(all, 0.95));
     for (const auto& e : errors) e.empty() ? std::printf(" -") : std::printf(" %.2f", mean(e));
     std::printf(" deg\n");
 }
@@ -347,7 +359,8 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
     const std::array<float, 5> bins = {40, 60, 80, 100, 120};
     std::array<std::vector<double>, 4> errors;
     std::vector<double> yawBias, pitchBias, headErrors, exactErrors, classifiedErrors, cornerErrors, cornerShiftX;
-    std::array<std::vector<double>, 2> landmarkErrors, refinedErrors;  // per eye: the corner midpoint's error, % of the inter-ocular distance
+    std::array<std::vector<double>, 2> landmarkErrors,
+        refinedErrors;  // per eye: the corner midpoint's error, % of the inter-ocular distance
     TrueGeometryFit trueGeometry(models);
     int failed = 0;
     FrameResult result;
@@ -389,11 +402,13 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
             cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
             for (int e = 0; e < 2; ++e) {
                 const gaze::Eye eye = e == 0 ? gaze::Eye::Left : gaze::Eye::Right;
-                const auto outer = static_cast<std::size_t>(gaze::outerCorner(eye)), inner = static_cast<std::size_t>(gaze::innerCorner(eye));
+                const auto outer = static_cast<std::size_t>(gaze::outerCorner(eye)),
+                           inner = static_cast<std::size_t>(gaze::innerCorner(eye));
                 const Landmarks68& l = *face.landmarks;
                 // A corner pair's midpoint minus the render's, in frame pixels.
                 const auto midpointError = [&](Point2 o, Point2 i) {
-                    return Point2{0.5f * (o.x + i.x - truth[outer].x - truth[inner].x), 0.5f * (o.y + i.y - truth[outer].y - truth[inner].y)};
+                    return Point2{0.5f * (o.x + i.x - truth[outer].x - truth[inner].x),
+                                  0.5f * (o.y + i.y - truth[outer].y - truth[inner].y)};
                 };
                 const Point2 d = midpointError(l[outer], l[inner]);
                 cornerErrors.push_back(100.0 * std::hypot(d.x, d.y) / iod);
@@ -408,8 +423,9 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
         }
     }
     std::vector<double> all;
-    std::printf("synthetic (%d renders%s: gaze yaw +-25, pitch +-20 deg; head yaw +-30; noise 2 grey levels, blur 0-1 px; %d without a gaze):\n",
-                renders, bareFaces ? " of bare faces, no brows or lips" : "", failed);
+    std::printf(
+        "synthetic (%d renders%s: gaze yaw +-25, pitch +-20 deg; head yaw +-30; noise 2 grey levels, blur 0-1 px; %d without a gaze):\n",
+        renders, bareFaces ? " of bare faces, no brows or lips" : "", failed);
     for (int b = 0; b < 4; ++b) {
         const auto& e = errors[static_cast<std::size_t>(b)];
         all.insert(all.end(), e.begin(), e.end());
@@ -418,18 +434,22 @@ void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& c
                     bins[static_cast<std::size_t>(b) + 1], mean(e), percentile(e, 0.95), e.size());
     }
     std::printf("  all: mean %.2f p95 %.2f deg\n", mean(all), percentile(all, 0.95));
-    std::printf("  bias, estimated - rendered, camera frame: gaze to the image's right %+.2f, up %+.2f deg; "
-                "the single-frame head pose's rotation error mean %.2f p95 %.2f deg\n",
-                mean(yawBias), mean(pitchBias), mean(headErrors), percentile(headErrors, 0.95));
-    std::printf("  the gaze fit alone, true head pose, eye corners and eyeball centres: on the renderer's exact classes mean %.2f "
-                "p95 %.2f deg; on the classifier's maps mean %.2f p95 %.2f deg\n",
-                mean(exactErrors), percentile(exactErrors, 0.95), mean(classifiedErrors), percentile(classifiedErrors, 0.95));
-    std::printf("  the tracker's eye-corner midpoint (where the eyeball is placed from) is %.2f %% of the inter-ocular distance "
-                "from the render's on average; its horizontal error correlates with the gaze's, r = %.2f\n",
-                mean(cornerErrors), cornerShiftX.size() == yawBias.size() ? pearson(cornerShiftX, yawBias) : std::nan(""));
-    std::printf("  the eye-corner midpoint, subject's left / right eye: landmarks %.2f / %.2f %%, refined by the eye model's corner "
-                "cascade (what places the eyeballs) %.2f / %.2f %%\n",
-                mean(landmarkErrors[0]), mean(landmarkErrors[1]), mean(refinedErrors[0]), mean(refinedErrors[1]));
+    std::printf(
+        "  bias, estimated - rendered, camera frame: gaze to the image's right %+.2f, up %+.2f deg; "
+        "the single-frame head pose's rotation error mean %.2f p95 %.2f deg\n",
+        mean(yawBias), mean(pitchBias), mean(headErrors), percentile(headErrors, 0.95));
+    std::printf(
+        "  the gaze fit alone, true head pose, eye corners and eyeball centres: on the renderer's exact classes mean %.2f "
+        "p95 %.2f deg; on the classifier's maps mean %.2f p95 %.2f deg\n",
+        mean(exactErrors), percentile(exactErrors, 0.95), mean(classifiedErrors), percentile(classifiedErrors, 0.95));
+    std::printf(
+        "  the tracker's eye-corner midpoint (where the eyeball is placed from) is %.2f %% of the inter-ocular distance "
+        "from the render's on average; its horizontal error correlates with the gaze's, r = %.2f\n",
+        mean(cornerErrors), cornerShiftX.size() == yawBias.size() ? pearson(cornerShiftX, yawBias) : std::nan(""));
+    std::printf(
+        "  the eye-corner midpoint, subject's left / right eye: landmarks %.2f / %.2f %%, refined by the eye model's corner "
+        "cascade (what places the eyeballs) %.2f / %.2f %%\n",
+        mean(landmarkErrors[0]), mean(landmarkErrors[1]), mean(refinedErrors[0]), mean(refinedErrors[1]));
     evalSyntheticTracked(std::max(1, renders / 4), renderer, tracker);
     evalSyntheticSequences(renderer, tracker, *models.face);
 }

@@ -39,11 +39,17 @@ common options:
 
 int main(int argc, char** argv) {
     using namespace facetrack::cli;
-    const std::map<std::string, std::function<int(const std::vector<std::string>&)>> commands = {
-        {"info", runInfo},         {"detect", runDetect},           {"track", runTrack},
-        {"landmarks", runLandmarks}, {"eval-detect", runEvalDetect}, {"eval-landmarks", runEvalLandmarks},
-        {"bench", runBench},       {"eval-track", runEvalTrack}, {"send", runSend},
-        {"eval-gaze", runEvalGaze}, {"eval-expressions", runEvalExpressions}};
+    const std::map<std::string, std::function<int(const std::vector<std::string>&)>> commands = {{"info", runInfo},
+                                                                                                 {"detect", runDetect},
+                                                                                                 {"track", runTrack},
+                                                                                                 {"landmarks", runLandmarks},
+                                                                                                 {"eval-detect", runEvalDetect},
+                                                                                                 {"eval-landmarks", runEvalLandmarks},
+                                                                                                 {"bench", runBench},
+                                                                                                 {"eval-track", runEvalTrack},
+                                                                                                 {"send", runSend},
+                                                                                                 {"eval-gaze", runEvalGaze},
+                                                                                                 {"eval-expressions", runEvalExpressions}};
     if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
         std::fputs(kUsage, argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;

@@ -17,7 +17,7 @@ struct LinePlot {
     double x_max = 1.0, y_max = 1.0;  ///< axes run from 0
     int x_ticks = 10, y_ticks = 10;
     std::string x_tick_format = "%.1f", y_tick_format = "%.1f";  ///< printf formats of a tick's value
-    double x_tick_scale = 1.0;  ///< a tick shows value * scale (e.g. 100 for per cent)
+    double x_tick_scale = 1.0;                                   ///< a tick shows value * scale (e.g. 100 for per cent)
     std::vector<PlotSeries> series;
 };
 

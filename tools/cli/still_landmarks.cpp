@@ -25,7 +25,8 @@ StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const s
         if (!cascadePath.empty()) throw Error("CNN file '" + path + "' has neither a landmark net nor a landmark refiner");
         return;
     }
-    method_ = std::string("facetrack LBF") + (cascade->hasRefiner() ? " + refiner" : "") + (cascade->hasLandmarkNet() ? " + fit + CNN" : "");
+    method_ = std::string("facetrack LBF") + (cascade->hasRefiner() ? " + refiner" : "") +
+              (cascade->hasLandmarkNet() ? " + fit + CNN" : "");
     models_.face = FaceModel::loadDefault();
     models_.cnn = std::move(cascade);
     tracker_ = std::make_unique<Tracker>(models_, config_);

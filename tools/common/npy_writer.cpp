@@ -18,7 +18,8 @@ void NpyWriter::add(const void* row, std::size_t bytes) {
 
 void NpyWriter::finish() {
     out_.close();
-    std::string header = "{'descr': '" + descr_ + "', 'fortran_order': False, 'shape': (" + std::to_string(rows_) + ", " + row_shape_ + "), }";
+    std::string header = "{'descr': '" + descr_ + "', 'fortran_order': False, 'shape': (" + std::to_string(rows_) + ", " + row_shape_ +
+                         "), }";
     header.resize(((header.size() + 11) / 64 + 1) * 64 - 11, ' ');  // the format pads the header to 64 bytes
     header += '\n';
     std::ofstream out(path_, std::ios::binary);

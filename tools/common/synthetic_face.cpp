@@ -17,9 +17,7 @@ namespace {
 constexpr float kDeg = 3.14159265358979f / 180.f;
 
 Eigen::Vector3f eig(const Vec3& v) { return {v.x, v.y, v.z}; }
-Eigen::Matrix3f rotationOf(const Quaternion& q) {
-    return Eigen::Quaternionf(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
-}
+Eigen::Matrix3f rotationOf(const Quaternion& q) { return Eigen::Quaternionf(q.w, q.x, q.y, q.z).normalized().toRotationMatrix(); }
 
 /// Iris texture: radial streaks and a darker limbal ring; `radial` 0 centre .. 1 edge.
 float irisShade(float radial, float angle) {
@@ -101,8 +99,8 @@ SyntheticRenderer::SyntheticRenderer(std::shared_ptr<const FaceModel> model, boo
 }
 
 Vec3 SyntheticRenderer::gazeInCamera(const SyntheticFace& f, int e) const {
-    const Eigen::Vector3f d = rotationOf(f.rotation) *
-                              gaze::gazeDirection(f.gaze_deg[static_cast<std::size_t>(e)][0] * kDeg, f.gaze_deg[static_cast<std::size_t>(e)][1] * kDeg);
+    const Eigen::Vector3f d = rotationOf(f.rotation) * gaze::gazeDirection(f.gaze_deg[static_cast<std::size_t>(e)][0] * kDeg,
+                                                                           f.gaze_deg[static_cast<std::size_t>(e)][1] * kDeg);
     return {d.x(), d.y(), d.z()};
 }
 
@@ -129,8 +127,7 @@ Box SyntheticRenderer::faceBox(const SyntheticFace& f) const {
     std::vector<Vec3> vertices;
     for (const int v : landmark_vertices_) vertices.push_back(mesh[static_cast<std::size_t>(v)]);
     Box b{1e9f, 1e9f, -1e9f, -1e9f};
-    for (const Point2& p : project(f, vertices))
-        b = {std::min(b.x0, p.x), std::min(b.y0, p.y), std::max(b.x1, p.x), std::max(b.y1, p.y)};
+    for (const Point2& p : project(f, vertices)) b = {std::min(b.x0, p.x), std::min(b.y0, p.y), std::max(b.x1, p.x), std::max(b.y1, p.y)};
     const float pad = 0.1f * b.width();
     return {b.x0 - pad, b.y0 - 2 * pad, b.x1 + pad, b.y1 + pad};
 }
@@ -201,7 +198,9 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f, ClassMap* classes) con
     cv::Mat eyeball(f.height, f.width, CV_8U, cv::Scalar(0));
     cv::Mat kind(f.height, f.width, CV_8U, cv::Scalar(0));
     for (int e = 0; e < 2; ++e) {
-        const Eigen::Vector3f centre = R * gaze::rotationCentre(geometry[static_cast<std::size_t>(e)], rigs[static_cast<std::size_t>(e)].centre(mesh)) + t;
+        const Eigen::Vector3f centre = R * gaze::rotationCentre(geometry[static_cast<std::size_t>(e)],
+                                                                rigs[static_cast<std::size_t>(e)].centre(mesh)) +
+                                       t;
         const Eigen::Vector3f g = R * gaze::gazeDirection(f.gaze_deg[static_cast<std::size_t>(e)][0] * kDeg,
                                                           f.gaze_deg[static_cast<std::size_t>(e)][1] * kDeg);
         const Eigen::Vector3f u = g.cross(Eigen::Vector3f::UnitY()).normalized(), v = g.cross(u);
@@ -235,8 +234,7 @@ cv::Mat SyntheticRenderer::render(const SyntheticFace& f, ClassMap* classes) con
     }
     // Lash lines: the skin bordering the visible eyeball darkens, as real lids do.
     cv::Mat rim;
-    cv::dilate(eyeball, rim, cv::Mat(), cv::Point(-1, -1),
-               std::max(1, static_cast<int>(std::lround(f.lash * interocularPx(f) / 60.f))));
+    cv::dilate(eyeball, rim, cv::Mat(), cv::Point(-1, -1), std::max(1, static_cast<int>(std::lround(f.lash * interocularPx(f) / 60.f))));
     shade.setTo(cv::Scalar(std::clamp(90.f - 35.f * f.lash, 20.f, 120.f)), rim & ~eyeball);
     if (classes) *classes = kind;
     cv::Mat image;

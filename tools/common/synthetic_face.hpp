@@ -20,18 +20,18 @@
 namespace facetrack::tools {
 
 struct SyntheticFace {
-    Quaternion rotation;           ///< camera from model (result.hpp's HeadPose convention)
+    Quaternion rotation;  ///< camera from model (result.hpp's HeadPose convention)
     Vec3 translation_mm{0, 0, 600};
-    std::vector<float> expression; ///< native weights (empty: neutral)
+    std::vector<float> expression;  ///< native weights (empty: neutral)
     /// (yaw, pitch) in degrees per eye, head frame, as EyeGaze: [0] the subject's left, [1] right.
     std::array<std::array<float, 2>, 2> gaze_deg{};
     float fx = 600.f, fy = 600.f, cx = 320.f, cy = 240.f;
     int width = 640, height = 480;
-    float noise_sigma = 2.f;       ///< grey levels, Gaussian
-    float blur_sigma = 0.f;        ///< pixels
-    float skin = 1.f;              ///< skin albedo (1: a light skin)
-    float iris = 1.f;              ///< iris albedo (1: a mid brown; below 1 darker, above lighter)
-    float lash = 1.f;              ///< lash line darkness and width
+    float noise_sigma = 2.f;                         ///< grey levels, Gaussian
+    float blur_sigma = 0.f;                          ///< pixels
+    float skin = 1.f;                                ///< skin albedo (1: a light skin)
+    float iris = 1.f;                                ///< iris albedo (1: a mid brown; below 1 darker, above lighter)
+    float lash = 1.f;                                ///< lash line darkness and width
     std::array<float, 3> light{-0.3f, -0.4f, -1.f};  ///< towards the light, camera frame
     unsigned seed = 1;
 };

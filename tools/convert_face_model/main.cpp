@@ -33,8 +33,8 @@
 namespace facetrack::tools {
 namespace {
 
-using model::FaceModelData;
 using Eigen::Vector3f;
+using model::FaceModelData;
 
 constexpr float kSparseThreshold = 1e-4f;  // cm; below the source's 6-digit text precision noise
 
@@ -113,8 +113,8 @@ void convertMesh(const ObjMesh& mesh, FaceModelData& out) {
             out.triangle_uvs.push_back({uvIds[0], uvIds[k], uvIds[k + 1]});
         }
     }
-    std::printf("mesh: %ld vertices, %zu polygons -> %zu triangles, %ld uvs\n", long(mesh.vertices.cols()),
-                mesh.faces.size(), out.triangles.size(), long(mesh.uvs.cols()));
+    std::printf("mesh: %ld vertices, %zu polygons -> %zu triangles, %ld uvs\n", long(mesh.vertices.cols()), mesh.faces.size(),
+                out.triangles.size(), long(mesh.uvs.cols()));
 }
 
 /// Nearest face-region vertex to p.
@@ -139,9 +139,7 @@ void convertContour(const nlohmann::json& lists, const nlohmann::json& headRange
     auto toCylinder = [&](const Vector3f& p) {
         return Vector3f(std::atan2(p.x(), p.z() - axisZ), p.y(), std::hypot(p.x(), p.z() - axisZ));
     };
-    auto fromCylinder = [&](const Vector3f& c) {
-        return Vector3f(c.z() * std::sin(c.x()), c.y(), axisZ + c.z() * std::cos(c.x()));
-    };
+    auto fromCylinder = [&](const Vector3f& c) { return Vector3f(c.z() * std::sin(c.x()), c.y(), axisZ + c.z() * std::cos(c.x())); };
     constexpr int kSamples = 16;
     constexpr float kDeg = std::numbers::pi_v<float> / 180.f;
     for (int i = 0; i < model::kContourLandmarkCount; ++i) {
@@ -160,8 +158,7 @@ void convertContour(const nlohmann::json& lists, const nlohmann::json& headRange
                 const float front = ca.x() - side * 10.f * kDeg;
                 const float back = std::clamp(cb.x() + side * 15.f * kDeg, -80.f * kDeg, 80.f * kDeg);
                 const float u = (front + t * (back - front) - ca.x()) / (cb.x() - ca.x() + side * 1e-3f);
-                const Vector3f c(front + t * (back - front), ca.y() + u * (cb.y() - ca.y()),
-                                 ca.z() + u * (cb.z() - ca.z()));
+                const Vector3f c(front + t * (back - front), ca.y() + u * (cb.y() - ca.y()), ca.z() + u * (cb.z() - ca.z()));
                 p = fromCylinder(c);
             } else {
                 p = a + Vector3f(0.f, 1.0f, 0.3f) + t * Vector3f(0.f, -2.5f, -2.3f);
@@ -208,8 +205,8 @@ model::Eyeball convertEyeball(const FaceModelData& d, const nlohmann::json& eyeb
         if (axial >= front - 0.12f) rim = std::max(rim, (r - axial * e.optical_axis).norm());
     }
     e.iris_radius = rim;
-    std::printf("eyeball %u-%u: centre (%.3f, %.3f, %.3f), radius %.3f, iris radius %.3f\n", e.first_vertex,
-                e.last_vertex, e.centre.x(), e.centre.y(), e.centre.z(), e.radius, e.iris_radius);
+    std::printf("eyeball %u-%u: centre (%.3f, %.3f, %.3f), radius %.3f, iris radius %.3f\n", e.first_vertex, e.last_vertex, e.centre.x(),
+                e.centre.y(), e.centre.z(), e.radius, e.iris_radius);
     return e;
 }
 

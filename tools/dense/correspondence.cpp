@@ -19,8 +19,7 @@ std::vector<int> Correspondence::usableVertices() const {
 }
 
 // Ericson, "Real-Time Collision Detection", 5.1.5: the Voronoi region of p.
-Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c) {
+Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
     const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
     const double d1 = ab.dot(ap), d2 = ac.dot(ap);
     if (d1 <= 0 && d2 <= 0) return {1, 0, 0};

@@ -30,7 +30,7 @@ struct Correspondence {
     double scale = 1.0;                     ///< s
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
     Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-    Eigen::VectorXd identity;               ///< a, of the canonical face
+    Eigen::VectorXd identity;  ///< a, of the canonical face
     int usableCount() const;
     /// The MediaPipe vertex ids the fit uses.
     std::vector<int> usableVertices() const;
@@ -42,8 +42,7 @@ struct Correspondence {
 constexpr double kMaxDistanceCm = 0.4;
 
 /// The nearest point of triangle (a, b, c) to p, as barycentric weights.
-Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c);
+Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
 /// MediaPipe's vertices at the outer eye corners (subject's right, left).
 constexpr int kCanonicalEyeCorners[2] = {33, 263};

@@ -32,8 +32,7 @@ Eigen::Matrix3Xd baseShape(const DenseModel& m, const Eigen::VectorXd& identity)
 
 /// Frontal, rolled like the eye line, at the depth where the model's eye
 /// corners are as far apart as the observed ones, centred on the points.
-fit::FaceParams coldStart(const DenseModel& m, const Eigen::Matrix3Xd& base, const core::Camera& camera,
-                          const Eigen::Matrix2Xd& observed) {
+fit::FaceParams coldStart(const DenseModel& m, const Eigen::Matrix3Xd& base, const core::Camera& camera, const Eigen::Matrix2Xd& observed) {
     fit::FaceParams p;
     p.expression = Eigen::VectorXd::Zero(m.basis.expressionCount());
     const Eigen::Vector2d eyeLine = observed.col(m.eye_corner_slots[1]) - observed.col(m.eye_corner_slots[0]);
@@ -47,7 +46,6 @@ fit::FaceParams coldStart(const DenseModel& m, const Eigen::Matrix3Xd& base, con
                        Eigen::Vector3d(centre3.x(), centre3.y(), 0.0);
     return p;
 }
-
 
 /// The frame's residual blocks: points (identity as a parameter, from the plain neutral) and the expression prior.
 void addFrame(ceres::Problem& problem, const DenseModel& m, const DenseFitSettings& settings, DenseFrame& frame, double& scale,
@@ -96,7 +94,8 @@ DenseModel denseModel(const model::FaceModelData& data, const Correspondence& c,
         m.basis.neutral.col(static_cast<Eigen::Index>(s)) += fit::modelToFrontal() * c.offsets_cm.col(vertices[s]);
     for (int side = 0; side < 2; ++side) {
         const auto it = std::find(vertices.begin(), vertices.end(), kCanonicalEyeCorners[side]);
-        if (it == vertices.end()) throw Error("the outer eye corner vertex " + std::to_string(kCanonicalEyeCorners[side]) + " has no surface point");
+        if (it == vertices.end())
+            throw Error("the outer eye corner vertex " + std::to_string(kCanonicalEyeCorners[side]) + " has no surface point");
         m.eye_corner_slots[static_cast<std::size_t>(side)] = static_cast<int>(it - vertices.begin());
     }
     return m;
@@ -138,8 +137,8 @@ Eigen::Matrix3Xd learnTeacherConvention(DenseModel& m, const DenseFitSettings& s
             for (int i = 0; i < n; ++i) {
                 const Eigen::Vector3d p = rotation * x.col(i) + one[0].params.translation();
                 const Eigen::Vector2d d = f.observed.col(i) - projected.col(i);
-                moves[static_cast<std::size_t>(i)].push_back(rotation.transpose() *
-                                                             Eigen::Vector3d(d.x() * p.z() / f.camera.fx, d.y() * p.z() / f.camera.fy, 0.0));
+                moves[static_cast<std::size_t>(i)].push_back(
+                    rotation.transpose() * Eigen::Vector3d(d.x() * p.z() / f.camera.fx, d.y() * p.z() / f.camera.fy, 0.0));
             }
         }
         Eigen::Matrix3Xd step(3, n);
@@ -197,7 +196,7 @@ void fitFrame(const DenseModel& m, const DenseFitSettings& settings, const Eigen
     }
     ceres::Solve(fit::solverOptions(settings.iterations, ceres::DENSE_QR, 1e-6), &problem, &summary);
     frame.residual = frame.params.pose.allFinite() && frame.params.expression.allFinite() ? rmsResidual(m, a, frame)
-                                                                                           : std::numeric_limits<double>::infinity();
+                                                                                          : std::numeric_limits<double>::infinity();
 }
 
 Eigen::VectorXd fitIdentity(const DenseModel& m, const DenseFitSettings& settings, std::vector<DenseFrame>& frames) {
@@ -211,7 +210,8 @@ Eigen::VectorXd fitIdentity(const DenseModel& m, const DenseFitSettings& setting
         nullptr, identity.data());
     for (std::size_t f = 0; f < frames.size(); ++f) addFrame(problem, m, settings, frames[f], scales[f], identity.data());
     ceres::Solver::Summary summary;
-    ceres::Solve(fit::solverOptions(settings.iterations, frames.size() > 1 ? ceres::DENSE_SCHUR : ceres::DENSE_QR, 1e-6), &problem, &summary);
+    ceres::Solve(fit::solverOptions(settings.iterations, frames.size() > 1 ? ceres::DENSE_SCHUR : ceres::DENSE_QR, 1e-6), &problem,
+                 &summary);
     if (!identity.allFinite()) identity.setZero();
     for (DenseFrame& f : frames) f.residual = rmsResidual(m, identity, f);
     return identity;

@@ -28,10 +28,10 @@
 namespace facetrack::dense {
 
 struct DenseFitSettings {
-    double huber = 0.05;           ///< in eye-corner distances
+    double huber = 0.05;            ///< in eye-corner distances
     double observable_l2 = 1e-4;    ///< w_j of an observed expression, per 68 points
     double unobservable_l2 = 1e-2;  ///< w_j of the others
-    double identity_prior = 2e-4;  ///< w_id, per 68 points and frame
+    double identity_prior = 2e-4;   ///< w_id, per 68 points and frame
     int iterations = 60;
 };
 
@@ -39,7 +39,7 @@ struct DenseFitSettings {
 /// which of its slots are the outer eye corners (the face size s and the start).
 struct DenseModel {
     fit::PointBasis basis;
-    std::vector<bool> observable;  ///< per basis expression
+    std::vector<bool> observable;           ///< per basis expression
     std::array<int, 2> eye_corner_slots{};  ///< subject's right, left
 };
 
@@ -74,8 +74,7 @@ DenseFrame teacherFrame(const TeacherMeshes& meshes, int row, const std::vector<
 /// Fits one frame's pose and expression with the identity held at `identity`
 /// (empty: the mean face). Cold (`warm` false): from a frontal start at the
 /// eye corners' depth, pose alone first.
-void fitFrame(const DenseModel& model, const DenseFitSettings& settings, const Eigen::VectorXd& identity, DenseFrame& frame,
-              bool warm);
+void fitFrame(const DenseModel& model, const DenseFitSettings& settings, const Eigen::VectorXd& identity, DenseFrame& frame, bool warm);
 
 /// The identity shared by `frames`, fitted jointly with each frame's pose and
 /// expression (each frame is fitted cold first). Frames hold their results.

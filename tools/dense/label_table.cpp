@@ -33,7 +33,8 @@ LabelTable readLabelTable(const std::string& path) {
     t.columns.assign(header.begin() + 2, header.end());
     for (int number = 2; std::getline(in, line); ++number) {
         const auto c = cells(line);
-        if (c.size() != header.size()) throw Error(path + ":" + std::to_string(number) + ": expected " + std::to_string(header.size()) + " cells");
+        if (c.size() != header.size())
+            throw Error(path + ":" + std::to_string(number) + ": expected " + std::to_string(header.size()) + " cells");
         LabelTable::Row row{c[0], c[1], {}};
         row.values.reserve(t.columns.size());
         try {
@@ -65,7 +66,8 @@ fit::FaceParams labelParams(const LabelColumns& c, const LabelTable::Row& row) {
     for (int k = 0; k < 3; ++k) p.pose[k] = row.values[static_cast<std::size_t>(c.omega + k)];
     for (int k = 0; k < 3; ++k) p.pose[3 + k] = row.values[static_cast<std::size_t>(c.translation + k)];
     p.expression.resize(static_cast<Eigen::Index>(c.expressions.size()));
-    for (std::size_t k = 0; k < c.expressions.size(); ++k) p.expression[static_cast<Eigen::Index>(k)] = row.values[static_cast<std::size_t>(c.expressions[k])];
+    for (std::size_t k = 0; k < c.expressions.size(); ++k)
+        p.expression[static_cast<Eigen::Index>(k)] = row.values[static_cast<std::size_t>(c.expressions[k])];
     return p;
 }
 

@@ -307,18 +307,21 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
     std::fprintf(stderr, "\r");
     if (crops == 0) throw Error("no crops in split '" + split + "'");
     const Eigen::Vector3d offsetDeg = eulerOf(offset);
-    std::printf("the shipped tracker (dense teacher labels, not ground truth); C from %d training crops: %.2f deg "
-                "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
-                trainCrops, angleDeg(offset), offsetDeg.x(), offsetDeg.y(), offsetDeg.z());
-    if (reference) std::printf("the label compared with: --reference's (%d %s crops it does not have left out)\n", unreferenced, split.c_str());
+    std::printf(
+        "the shipped tracker (dense teacher labels, not ground truth); C from %d training crops: %.2f deg "
+        "(Euler pitch, yaw, roll %.2f, %.2f, %.2f)\n",
+        trainCrops, angleDeg(offset), offsetDeg.x(), offsetDeg.y(), offsetDeg.z());
+    if (reference)
+        std::printf("the label compared with: --reference's (%d %s crops it does not have left out)\n", unreferenced, split.c_str());
     const auto line = [](const char* name, const std::vector<double>& deg) {
         if (deg.empty()) return (void)std::printf("  %-54s %5d\n", name, 0);
         std::printf("  %-54s %5zu, mean %5.2f median %5.2f deg, within 3 deg %5.1f %%\n", name, deg.size(), meanOf(deg), medianOf(deg),
                     within3(deg));
     };
-    std::printf("%d %s crops x %d starts: frame 1 the crop turned by yaw +-%.0f deg (uniform) and scaled by +-%.0f %%, frame 2 the crop, "
-                "followed with no full-frame search (starts lost: %d on frame 1, %d on frame 2; %d crops not followed unperturbed)\n",
-                crops, split.c_str(), starts, yawDeg, 100.0 * depth, lostFirst, lostSecond, unfollowed);
+    std::printf(
+        "%d %s crops x %d starts: frame 1 the crop turned by yaw +-%.0f deg (uniform) and scaled by +-%.0f %%, frame 2 the crop, "
+        "followed with no full-frame search (starts lost: %d on frame 1, %d on frame 2; %d crops not followed unperturbed)\n",
+        crops, split.c_str(), starts, yawDeg, 100.0 * depth, lostFirst, lostSecond, unfollowed);
     line("start (frame 1's pose) to the label", startDeg);
     line("frame 2 to the label (after C)", toLabel);
     line("unperturbed (frame 1 the crop) to the label", unperturbedToLabel);
@@ -345,15 +348,16 @@ void trackerRobustness(const std::string& split, int starts, double yawDeg, doub
 }
 
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--cascade", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w", "--profiled",
-                            "--reference"},
-                           {"--help", "--tracker"});
+    const tools::Args args(
+        std::vector<std::string>(argv + 1, argv + argc),
+        {"--cascade", "--starts", "--split", "--yaw-deg", "--depth", "--labels", "--faces300w", "--profiled", "--reference"},
+        {"--help", "--tracker"});
     if (args.has("--help")) {
-        std::puts("usage: eval_cnn [--cascade models/cnn_cascade.ftm] [--starts 5] [--split validation]\n"
-                  "       [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--faces300w DIR] [--profiled N]\n"
-                  "       eval_cnn --tracker [--starts 5] [--split validation] [--yaw-deg 15] [--depth 0.1] [--labels DIR] [--faces300w DIR]\n"
-                  "                [--reference LABELS.csv]");
+        std::puts(
+            "usage: eval_cnn [--cascade models/cnn_cascade.ftm] [--starts 5] [--split validation]\n"
+            "       [--yaw-deg 15] [--depth 0.1] [--labels build/dense_labels] [--faces300w DIR] [--profiled N]\n"
+            "       eval_cnn --tracker [--starts 5] [--split validation] [--yaw-deg 15] [--depth 0.1] [--labels DIR] [--faces300w DIR]\n"
+            "                [--reference LABELS.csv]");
         return 0;
     }
     const std::string split = args.get("--split", "validation");
@@ -364,8 +368,9 @@ int run(int argc, char** argv) {
     if (args.has("--tracker")) {
         std::optional<dense::LabelTable> reference;
         if (args.has("--reference")) reference = dense::readLabelTable(args.get("--reference"));
-        trackerRobustness(split, starts, yawDeg, depth, dense::readLabelTable(args.get("--labels", "build/dense_labels") + "/faces300w.csv"),
-                          reference, tools::faces300wRoot(args.get("--faces300w", "")));
+        trackerRobustness(split, starts, yawDeg, depth,
+                          dense::readLabelTable(args.get("--labels", "build/dense_labels") + "/faces300w.csv"), reference,
+                          tools::faces300wRoot(args.get("--faces300w", "")));
         return 0;
     }
 
@@ -383,7 +388,8 @@ int run(int argc, char** argv) {
     std::vector<nn::PatchNet> nets;
     std::vector<std::size_t> roundNet;  // per round, its stage
     for (std::size_t i = 0; i < data.stages.size(); ++i) {
-        nets.emplace_back(data.stages[i].onnx, data.patch_size, 6 + static_cast<int>(data.expressions.size()), "stage " + std::to_string(i + 1));
+        nets.emplace_back(data.stages[i].onnx, data.patch_size, 6 + static_cast<int>(data.expressions.size()),
+                          "stage " + std::to_string(i + 1));
         roundNet.insert(roundNet.end(), static_cast<std::size_t>(data.stages[i].rounds), i);
     }
     const int iterations = static_cast<int>(roundNet.size());
@@ -496,12 +502,13 @@ int run(int argc, char** argv) {
         }
         if (profiledTries > 0) {
             const std::vector<float> identity(labelIdentity.data(), labelIdentity.data() + labelIdentity.size());
-            for (const auto& copy : profile::profiledCopies(*model, grey, camera, identity,
-                                                            profile::nativeWeights(*model, expressionIds, label.expression), label,
-                                                            profiledTries, rng)) {
+            for (const auto& copy :
+                 profile::profiledCopies(*model, grey, camera, identity, profile::nativeWeights(*model, expressionIds, label.expression),
+                                         label, profiledTries, rng)) {
                 const int bin = std::clamp(static_cast<int>(std::abs(fit::eulerDegrees(copy.label.omega()).y()) / 15.0) - 1, 0, kBins - 1);
                 ++binFaces[static_cast<std::size_t>(bin)];
-                const fit::Landmarks2d carried = profile::carriedLandmarks(layout, landmarkBasis, labelIdentity, camera, label, points, copy.label);
+                const fit::Landmarks2d carried = profile::carriedLandmarks(layout, landmarkBasis, labelIdentity, camera, label, points,
+                                                                           copy.label);
                 const auto b = static_cast<std::size_t>(bin);
                 if (!evaluate(copy.image, copy.label, carried, binned[b], binnedFit[b], binLbf[b], binFull[b])) ++binUnfitted[b];
             }
@@ -510,16 +517,19 @@ int run(int argc, char** argv) {
     }
     if (crops == 0) throw Error("no crops in split '" + split + "'");
     std::fprintf(stderr, "\r");
-    std::printf("%d %s crops x %d starts (yaw +-%.0f deg, scale +-%.0f %%), against the dense teacher labels:\n", crops, split.c_str(), starts,
-                yawDeg, 100.0 * depth);
-    for (int i = 0; i <= iterations; ++i) report(i == 0 ? "start" : ("round " + std::to_string(i)).c_str(), rounds[static_cast<std::size_t>(i)]);
+    std::printf("%d %s crops x %d starts (yaw +-%.0f deg, scale +-%.0f %%), against the dense teacher labels:\n", crops, split.c_str(),
+                starts, yawDeg, 100.0 * depth);
+    for (int i = 0; i <= iterations; ++i)
+        report(i == 0 ? "start" : ("round " + std::to_string(i)).c_str(), rounds[static_cast<std::size_t>(i)]);
     std::printf("from the tracker's LBF + fit (%d crops; %d without a YuNet box or a fitted face):\n", crops - unfitted, unfitted);
-    for (int i = 0; i <= iterations; ++i) report(i == 0 ? "fit" : ("round " + std::to_string(i)).c_str(), fromFit[static_cast<std::size_t>(i)]);
+    for (int i = 0; i <= iterations; ++i)
+        report(i == 0 ? "fit" : ("round " + std::to_string(i)).c_str(), fromFit[static_cast<std::size_t>(i)]);
     reportLandmarks("LBF", cropLbf);
     reportLandmarks("LBF + fit + CNN", cropFull);
     for (std::size_t b = 0; b < 4; ++b) {
         if (cropBinLbf[b].box_nme.empty()) continue;
-        std::printf("crops with label |yaw| %s deg:\n", b == 3 ? "over 45" : (std::to_string(15 * b) + "-" + std::to_string(15 * b + 15)).c_str());
+        std::printf("crops with label |yaw| %s deg:\n",
+                    b == 3 ? "over 45" : (std::to_string(15 * b) + "-" + std::to_string(15 * b + 15)).c_str());
         reportLandmarks("  LBF", cropBinLbf[b]);
         reportLandmarks("  LBF + fit + CNN", cropBinFull[b]);
     }

@@ -62,10 +62,9 @@ double quantile(std::vector<double> v, double q) {
 /// Split of each 300-W image, by its path relative to the faces300w folder.
 std::map<std::string, std::string> splitsOf300W(const std::string& root) {
     std::map<std::string, std::string> out;
-    for (const auto& [split, name] : {std::pair{tools::Split::Train, "train"}, {tools::Split::Validation, "validation"},
-                                      {tools::Split::Test, "test"}}) {
-        for (const auto& a : tools::list300W(root, split))
-            out[std::filesystem::relative(a.image, root).string()] = name;
+    for (const auto& [split, name] :
+         {std::pair{tools::Split::Train, "train"}, {tools::Split::Validation, "validation"}, {tools::Split::Test, "test"}}) {
+        for (const auto& a : tools::list300W(root, split)) out[std::filesystem::relative(a.image, root).string()] = name;
     }
     return out;
 }
@@ -142,8 +141,8 @@ struct Setup {
 /// The teacher's convention (dense::learnTeacherConvention), learned on the 300-W training crops
 /// whose annotated landmarks fit a closed, unsmiling mouth: 300-W's average face smiles, and a
 /// convention learned on it would read a relaxed mouth as its opposite. Added to s.model.
-void learnConvention(Setup& s, const dense::TeacherMeshes& faces, const std::map<std::string, std::string>& splits,
-                     const std::string& root, int rounds, nlohmann::json& summary) {
+void learnConvention(Setup& s, const dense::TeacherMeshes& faces, const std::map<std::string, std::string>& splits, const std::string& root,
+                     int rounds, nlohmann::json& summary) {
     const auto& data = s.data;
     const auto& vertices = s.vertices;
     // The landmark convention's offsets with a flat prior: its prior is learned from these labels.
@@ -219,12 +218,15 @@ void label300W(const Setup& s, const dense::TeacherMeshes& meshes, const std::ma
     }
     for (const auto& [split, v] : residuals) {
         const auto& n = nmes[split];
-        std::printf("300-W %-10s %4zu crops: residual to the teacher median %.4f, p95 %.4f eye-corner distances\n"
-                    "  landmarks vs the annotation, median NME (inter-ocular): brows %.4f, nose %.4f, eyes %.4f, mouth %.4f, "
-                    "17-67 %.4f\n",
-                    split.c_str(), v.size(), quantile(v, 0.5), quantile(v, 0.95), quantile(n[0], 0.5), quantile(n[1], 0.5),
-                    quantile(n[2], 0.5), quantile(n[3], 0.5), quantile(n[4], 0.5));
-        summary["faces300w"][split] = {{"crops", v.size()}, {"residual_median", quantile(v, 0.5)}, {"residual_p95", quantile(v, 0.95)},
+        std::printf(
+            "300-W %-10s %4zu crops: residual to the teacher median %.4f, p95 %.4f eye-corner distances\n"
+            "  landmarks vs the annotation, median NME (inter-ocular): brows %.4f, nose %.4f, eyes %.4f, mouth %.4f, "
+            "17-67 %.4f\n",
+            split.c_str(), v.size(), quantile(v, 0.5), quantile(v, 0.95), quantile(n[0], 0.5), quantile(n[1], 0.5), quantile(n[2], 0.5),
+            quantile(n[3], 0.5), quantile(n[4], 0.5));
+        summary["faces300w"][split] = {{"crops", v.size()},
+                                       {"residual_median", quantile(v, 0.5)},
+                                       {"residual_p95", quantile(v, 0.95)},
                                        {"landmark_nme_median", quantile(n[4], 0.5)}};
     }
 }
@@ -265,17 +267,22 @@ void labelClips(const Setup& s, const std::string& teacherDir, const std::string
         }
         std::printf("clip %-42s %4d frames: residual median %.4f, p95 %.4f; |identity| %.2f\n", clip.c_str(), count,
                     quantile(residuals, 0.5), quantile(residuals, 0.95), identity.norm());
-        summary["clips"][clip] = {{"frames", count}, {"residual_median", quantile(residuals, 0.5)},
-                                  {"residual_p95", quantile(residuals, 0.95)}, {"split", heldOut ? "heldout" : "train"}};
+        summary["clips"][clip] = {{"frames", count},
+                                  {"residual_median", quantile(residuals, 0.5)},
+                                  {"residual_p95", quantile(residuals, 0.95)},
+                                  {"split", heldOut ? "heldout" : "train"}};
     }
 }
 
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--out", "--only", "--limit", "--teacher", "--canonical", "--faces300w", "--identity-prior", "--observable-l2", "--unobservable-l2", "--convention-rounds"}, {"--help"});
+                           {"--out", "--only", "--limit", "--teacher", "--canonical", "--faces300w", "--identity-prior", "--observable-l2",
+                            "--unobservable-l2", "--convention-rounds"},
+                           {"--help"});
     if (args.has("--help")) {
-        std::puts("usage: label_dense [--out build/dense_labels] [--only 300w|clips] [--limit N] [--teacher DIR]\n"
-                  "                   [--canonical OBJ] [--faces300w DIR]");
+        std::puts(
+            "usage: label_dense [--out build/dense_labels] [--only 300w|clips] [--limit N] [--teacher DIR]\n"
+            "                   [--canonical OBJ] [--faces300w DIR]");
         return 0;
     }
     std::setvbuf(stdout, nullptr, _IOLBF, 0);  // the log shows each step as it ends
@@ -288,7 +295,8 @@ int run(int argc, char** argv) {
 
     const auto model = FaceModel::load(FaceModel::defaultPath());
     const model::FaceModelData& data = model::dataOf(*model);
-    const auto canonical = dense::readCanonicalMesh(args.get("--canonical", "../shared/models/mediapipe-canonical/canonical_face_model.obj"));
+    const auto canonical = dense::readCanonicalMesh(
+        args.get("--canonical", "../shared/models/mediapipe-canonical/canonical_face_model.obj"));
 
     // 1. Correspondence.
     const dense::Correspondence corr = dense::buildCorrespondence(data, canonical.vertices);
@@ -297,8 +305,8 @@ int run(int argc, char** argv) {
         out << "mediapipe_vertex,v0,v1,v2,w0,w1,w2,distance_cm,used\n";
         for (int i = 0; i < dense::kMeshVertexCount; ++i) {
             const auto& p = corr.points[static_cast<std::size_t>(i)];
-            out << i << ',' << p.vertices[0] << ',' << p.vertices[1] << ',' << p.vertices[2] << ',' << p.weights[0] << ','
-                << p.weights[1] << ',' << p.weights[2] << ',' << corr.distance_cm[static_cast<std::size_t>(i)] << ','
+            out << i << ',' << p.vertices[0] << ',' << p.vertices[1] << ',' << p.vertices[2] << ',' << p.weights[0] << ',' << p.weights[1]
+                << ',' << p.weights[2] << ',' << corr.distance_cm[static_cast<std::size_t>(i)] << ','
                 << int(corr.usable[static_cast<std::size_t>(i)]) << '\n';
         }
     }
@@ -308,12 +316,13 @@ int run(int argc, char** argv) {
         std::printf("alignment rotation %.2f deg about (%.2f, %.2f, %.2f)\n", turn.angle() * 180 / M_PI, turn.axis().x(), turn.axis().y(),
                     turn.axis().z());
     }
-    std::printf("correspondence: %d of %d MediaPipe vertices on the model's face (< %.1f mm); distance median %.2f mm, p90 %.2f mm; "
-                "scale %.3f, |identity| %.2f\n",
-                corr.usableCount(), dense::kMeshVertexCount, 10 * dense::kMaxDistanceCm, 10 * medianDistance, 10 * p90Distance, corr.scale,
-                corr.identity.norm());
-    summary["correspondence"] = {{"used", corr.usableCount()}, {"median_mm", 10 * medianDistance}, {"p90_mm", 10 * p90Distance},
-                                 {"scale", corr.scale}};
+    std::printf(
+        "correspondence: %d of %d MediaPipe vertices on the model's face (< %.1f mm); distance median %.2f mm, p90 %.2f mm; "
+        "scale %.3f, |identity| %.2f\n",
+        corr.usableCount(), dense::kMeshVertexCount, 10 * dense::kMaxDistanceCm, 10 * medianDistance, 10 * p90Distance, corr.scale,
+        corr.identity.norm());
+    summary["correspondence"] = {
+        {"used", corr.usableCount()}, {"median_mm", 10 * medianDistance}, {"p90_mm", 10 * p90Distance}, {"scale", corr.scale}};
 
     // 2. Which expressions the dense points observe (the landmark fit's rule). The labels fit all of
     // them but eyeLook* (the mesh has no eyeballs): the prior settles what the points cannot.

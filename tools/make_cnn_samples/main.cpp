@@ -118,7 +118,8 @@ std::optional<fit::FaceParams> trackerStart(const TrackerStarts& from, const cv:
     fit::FaceParams start;
     expression::readParams(*face.pose, face.expression->native, expressions, start);
     identity = Eigen::Map<const Eigen::VectorXf>(face.identity.data(), static_cast<Eigen::Index>(face.identity.size())).cast<double>();
-    const double offDeg = Eigen::AngleAxisd(fit::rotationOf(start.omega()) * fit::rotationOf(label.omega()).transpose()).angle() * 180.0 / M_PI;
+    const double offDeg = Eigen::AngleAxisd(fit::rotationOf(start.omega()) * fit::rotationOf(label.omega()).transpose()).angle() * 180.0 /
+                          M_PI;
     if (offDeg > from.max_deg) return std::nullopt;
     return start;
 }
@@ -153,7 +154,8 @@ cv::Mat samplesOf(const expression::WarpLayout& layout, const LabelledImage& ima
         if (n > 0) {
             // Turned about the face centre, moved sideways, scaled (moved along its ray).
             Eigen::VectorXd move = Eigen::VectorXd::Zero(6);
-            move.head<3>() = M_PI / 180.0 * Eigen::Vector3d(perturb.rotation_deg * sym(rng), perturb.yaw_deg * sym(rng), perturb.rotation_deg * sym(rng));
+            move.head<3>() = M_PI / 180.0 *
+                             Eigen::Vector3d(perturb.rotation_deg * sym(rng), perturb.yaw_deg * sym(rng), perturb.rotation_deg * sym(rng));
             const Eigen::Vector3d centre = fit::rotationOf(base.omega()) * layout.centre + base.translation();
             move.segment<3>(3) = perturb.depth * sym(rng) * centre / centre.z() +
                                  Eigen::Vector3d(perturb.translation * sym(rng), perturb.translation * sym(rng), 0.0);
@@ -165,8 +167,10 @@ cv::Mat samplesOf(const expression::WarpLayout& layout, const LabelledImage& ima
         patches.add(patch);
         if (targets.out) {
             if (!image.landmarks) throw Error(image.key + ": no annotated points for the landmark targets");
-            const Eigen::VectorXf d = expression::displacementsOf(expression::patchToFrame(layout, anchors),
-                                                           expression::projectedLandmarks(targets.basis, landmarkShape, camera, start, slots), *image.landmarks)
+            const Eigen::VectorXf d = expression::displacementsOf(
+                                          expression::patchToFrame(layout, anchors),
+                                          expression::projectedLandmarks(targets.basis, landmarkShape, camera, start, slots),
+                                          *image.landmarks)
                                           .cast<float>();
             targets.out->add(d.data(), sizeof(float) * static_cast<std::size_t>(d.size()));
         }
@@ -196,7 +200,8 @@ int copySamplesOf(const expression::WarpLayout& layout, const LabelledImage& ima
         LabelledImage turned = image;
         turned.label = copy.label;
         if (image.landmarks)
-            turned.landmarks = profile::carriedLandmarks(layout, targets.basis, image.identity, camera, image.label, *image.landmarks, copy.label);
+            turned.landmarks = profile::carriedLandmarks(layout, targets.basis, image.identity, camera, image.label, *image.landmarks,
+                                                         copy.label);
         if (tracker && (!turned.landmarks || !(turned.start = trackerStart(*tracker, copy.image, *turned.landmarks, turned.label,
                                                                            layout.anchors.expressions, turned.start_identity))))
             continue;
@@ -216,7 +221,8 @@ cv::Mat profiledPair(const FaceModel& model, const expression::WarpLayout& layou
     const std::vector<float> native = profile::nativeWeights(model, layout.anchors.expressions, image.label.expression);
     const double yaw = fit::eulerDegrees(image.label.omega()).y();
     const fit::FaceParams turned = profile::turnedBy(image.label, yaw >= 0 ? 40.0 : -40.0);
-    const auto face = profile::profileFace(model, grey, core::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity, native, image.label, turned);
+    const auto face = profile::profileFace(model, grey, core::cameraFor(grey.cols, grey.rows, 60.0, 0.0), identity, native, image.label,
+                                           turned);
     cv::Mat pair;
     cv::hconcat(grey, face.image, pair);
     cv::resize(pair, pair, cv::Size(pair.cols * 240 / pair.rows, 240), 0, 0, cv::INTER_AREA);
@@ -226,14 +232,15 @@ cv::Mat profiledPair(const FaceModel& model, const expression::WarpLayout& layou
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
-                             "--expression-sigma", "--profiled", "--expression-copies", "--limit", "--faces300w", "--starts-from",
-                             "--max-start-deg", "--copy-groups"},
+                            "--expression-sigma", "--profiled", "--expression-copies", "--limit", "--faces300w", "--starts-from",
+                            "--max-start-deg", "--copy-groups"},
                            {"--help", "--no-clips"});
     if (args.has("--help")) {
-        std::puts("usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
-                  "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
-                  "       [--profiled N] [--expression-copies N [--copy-groups G,...]] [--limit N] [--faces300w DIR] [--no-clips]\n"
-                  "       [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]");
+        std::puts(
+            "usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
+            "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
+            "       [--profiled N] [--expression-copies N [--copy-groups G,...]] [--limit N] [--faces300w DIR] [--no-clips]\n"
+            "       [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]");
         return 0;
     }
     const std::string labels = args.get("--labels", "build/dense_labels"), outDir = args.get("--out", "build/cnn_samples");
@@ -255,7 +262,8 @@ int run(int argc, char** argv) {
     std::filesystem::create_directories(outDir);
 
     const auto model = FaceModel::loadDefault();  // with the landmark convention, as the tracker and the landmark net run
-    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*model), dense::labelledExpressions(model::dataOf(*model)));
+    const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*model),
+                                                                     dense::labelledExpressions(model::dataOf(*model)));
     const auto names = layout.anchors.expressionNames(model::dataOf(*model));
     std::mt19937 rng(17);
     const fit::FitBasis landmarkBasis = expression::landmarkBasis(*model, layout.anchors.expressions);
@@ -325,7 +333,8 @@ int run(int argc, char** argv) {
             const core::Shape2 points = core::readPts(root + "/" + key.substr(0, key.rfind('.')) + ".pts");
             if (points.cols() != model::kLandmarkCount) throw Error(key + ": its .pts does not have 68 points");
             image.landmarks = points.cast<double>();
-            if (!tracker || (image.start = trackerStart(*tracker, grey, *image.landmarks, image.label, layout.anchors.expressions, image.start_identity)))
+            if (!tracker || (image.start = trackerStart(*tracker, grey, *image.landmarks, image.label, layout.anchors.expressions,
+                                                        image.start_identity)))
                 samplesOf(layout, image, grey, perturb, rng, patches, samples, {landmarkBasis, &landmarks});
             const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
             const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
@@ -335,9 +344,8 @@ int run(int argc, char** argv) {
             profiledFaces += copySamplesOf(layout, image, camera, turned, CopyKind::Turned, perturb, rng, profiledPatches, profiledSamples,
                                            {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
             if (image.split == "train" && moved > 0) {
-                const auto copies =
-                    profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label, moved, rng,
-                                              copyGroups);
+                const auto copies = profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label,
+                                                              moved, rng, copyGroups);
                 movedFaces += copySamplesOf(layout, image, camera, copies, CopyKind::Moved, perturb, rng, movedPatches, movedSamples,
                                             {landmarkBasis, &movedLandmarks}, tracker ? &*tracker : nullptr);
             }
@@ -396,7 +404,9 @@ int run(int argc, char** argv) {
             std::vector<cv::Mat> rows;
             for (std::size_t r = 0; r < sheet.size(); r += 8) {
                 cv::Mat line;
-                cv::hconcat(std::vector<cv::Mat>(sheet.begin() + static_cast<std::ptrdiff_t>(r), sheet.begin() + static_cast<std::ptrdiff_t>(r + 8)), line);
+                cv::hconcat(std::vector<cv::Mat>(sheet.begin() + static_cast<std::ptrdiff_t>(r),
+                                                 sheet.begin() + static_cast<std::ptrdiff_t>(r + 8)),
+                            line);
                 rows.push_back(line);
             }
             cv::Mat all;
@@ -408,8 +418,8 @@ int run(int argc, char** argv) {
         }
     }
     std::printf("wrote %s/{faces300w,profiled,moved%s}_{patches.npy,samples.csv}, {faces300w,profiled,moved}_landmarks.npy%s\n",
-                outDir.c_str(),
-                args.has("--no-clips") ? "" : ",clips", args.has("--no-clips") ? "" : ", contact_sheet.png and profile_sheet.png");
+                outDir.c_str(), args.has("--no-clips") ? "" : ",clips",
+                args.has("--no-clips") ? "" : ", contact_sheet.png and profile_sheet.png");
     return 0;
 }
 

@@ -52,7 +52,8 @@ const char* kUsage =
     "                           [--faces300w DIR] [--seed 23] [--turn-clips N [--turn-step 2]]";
 
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--split", "--out", "--copies", "--labels", "--faces300w", "--seed", "--turn-clips", "--turn-step"},
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
+                           {"--split", "--out", "--copies", "--labels", "--faces300w", "--seed", "--turn-clips", "--turn-step"},
                            {"--help"});
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -94,7 +95,8 @@ int run(int argc, char** argv) {
     }
     if (turns && static_cast<int>(rows.size()) > turnClips) {
         std::vector<const dense::LabelTable::Row*> spaced;
-        for (int k = 0; k < turnClips; ++k) spaced.push_back(rows[rows.size() * static_cast<std::size_t>(k) / static_cast<std::size_t>(turnClips)]);
+        for (int k = 0; k < turnClips; ++k)
+            spaced.push_back(rows[rows.size() * static_cast<std::size_t>(k) / static_cast<std::size_t>(turnClips)]);
         rows = spaced;
     }
 
@@ -121,7 +123,7 @@ int run(int argc, char** argv) {
         const std::vector<float> expression = profile::nativeWeights(*model, expressions, label.expression);
         int kept = 0;  // numbers the copies: two may round to one yaw
         for (const auto& copy : turns ? profile::turnSequence(*model, grey, camera, identityF, expression, label, turnStep)
-                                              : profile::profiledCopies(*model, grey, camera, identityF, expression, label, copies, rng)) {
+                                      : profile::profiledCopies(*model, grey, camera, identityF, expression, label, copies, rng)) {
             const double yaw = fit::eulerDegrees(copy.label.omega()).y();
             char suffix[32];
             if (turns) std::snprintf(suffix, sizeof suffix, "/%04d", kept++);
@@ -141,7 +143,8 @@ int run(int argc, char** argv) {
     std::fputc('\n', stderr);
     if (crops == 0) throw Error("no labelled crops in split '" + split + "'");
     if (!poses || (index.is_open() && !index)) throw Error("cannot write " + out + "/poses.csv or index.csv");
-    std::printf("%d %s crops -> %d %s in %s\n", crops, split.c_str(), written, turns ? "frames of head turns" : "profiled copies", out.c_str());
+    std::printf("%d %s crops -> %d %s in %s\n", crops, split.c_str(), written, turns ? "frames of head turns" : "profiled copies",
+                out.c_str());
     return 0;
 }
 

@@ -68,7 +68,8 @@ std::string columnsPath(const std::string& onnxPath) {
 std::vector<std::string> columns(const std::string& onnxPath) {
     std::stringstream lines(readBytes(columnsPath(onnxPath)));
     std::vector<std::string> names;
-    for (std::string line; std::getline(lines, line);) if (!line.empty()) names.push_back(line);
+    for (std::string line; std::getline(lines, line);)
+        if (!line.empty()) names.push_back(line);
     return names;
 }
 
@@ -123,13 +124,15 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 }
 
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from",
-                                                                                                  "--min-validation-r", "--refiner", "--sides", "--base"},
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
+                           {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r",
+                            "--refiner", "--sides", "--base"},
                            {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation"});
     if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
-        std::puts("usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
-                  "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
-                  "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation]");
+        std::puts(
+            "usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
+            "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
+            "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = tools::splitList(args.get("--nets", ""));
@@ -157,7 +160,8 @@ int run(int argc, char** argv) {
         stage.onnx = readBytes(nets[i]);
         nn::PatchNet check(stage.onnx, model.patch_size, 6 + static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
         model.stages.push_back(std::move(stage));
-        std::printf("stage %zu: %s, %d round(s), %zu bytes\n", i + 1, nets[i].c_str(), model.stages.back().rounds, model.stages.back().onnx.size());
+        std::printf("stage %zu: %s, %d round(s), %zu bytes\n", i + 1, nets[i].c_str(), model.stages.back().rounds,
+                    model.stages.back().onnx.size());
     }
     if (args.has("--mirror-average")) {
         if (model.stages.empty()) throw Error("--mirror-average needs cascade stages (--nets)");

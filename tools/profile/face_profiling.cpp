@@ -47,7 +47,8 @@ struct View {
 
 View viewOf(const std::vector<Vec3>& verticesMm, const core::Camera& camera, const fit::FaceParams& pose) {
     const Eigen::Matrix3d r = fit::rotationOf(pose.omega()) * fit::modelToFrontal();
-    View v{Eigen::Matrix3Xd(3, static_cast<Eigen::Index>(verticesMm.size())), Eigen::Matrix2Xd(2, static_cast<Eigen::Index>(verticesMm.size()))};
+    View v{Eigen::Matrix3Xd(3, static_cast<Eigen::Index>(verticesMm.size())),
+           Eigen::Matrix2Xd(2, static_cast<Eigen::Index>(verticesMm.size()))};
     for (std::size_t i = 0; i < verticesMm.size(); ++i) {
         const auto k = static_cast<Eigen::Index>(i);
         v.points.col(k) = r * Eigen::Vector3d(verticesMm[i].x, verticesMm[i].y, verticesMm[i].z) / 10.0 + pose.translation();
@@ -102,7 +103,8 @@ void backgroundMap(const View& photographed, const View& turned, int width, int 
         }
     }
     double minX = 0, minY = 0, maxX = width, maxY = height;
-    for (const auto& p : to) minX = std::min(minX, p.x()), minY = std::min(minY, p.y()), maxX = std::max(maxX, p.x()), maxY = std::max(maxY, p.y());
+    for (const auto& p : to)
+        minX = std::min(minX, p.x()), minY = std::min(minY, p.y()), maxX = std::max(maxX, p.x()), maxY = std::max(maxY, p.y());
     cv::Subdiv2D subdiv(cv::Rect(static_cast<int>(std::floor(minX)) - 1, static_cast<int>(std::floor(minY)) - 1,
                                  static_cast<int>(std::ceil(maxX - minX)) + 3, static_cast<int>(std::ceil(maxY - minY)) + 3));
     std::map<std::pair<float, float>, std::size_t> index;
@@ -279,7 +281,8 @@ ProfiledFace profileFace(const FaceModel& model, const cv::Mat& source, const co
                       d = z;
                       hidden.at<std::uint8_t>(y, x) = wasSeen ? 0 : 1;
                       if (!wasSeen) return;  // the background shows: the photograph has no texture for it
-                      const Eigen::Vector2d s = w[0] * from.projected.col(t[0]) + w[1] * from.projected.col(t[1]) + w[2] * from.projected.col(t[2]);
+                      const Eigen::Vector2d s = w[0] * from.projected.col(t[0]) + w[1] * from.projected.col(t[1]) +
+                                                w[2] * from.projected.col(t[2]);
                       mapX.at<float>(y, x) = static_cast<float>(s.x());
                       mapY.at<float>(y, x) = static_cast<float>(s.y());
                   });
@@ -299,9 +302,10 @@ fit::Landmarks2d carriedLandmarks(const expression::WarpLayout& layout, const fi
     const Eigen::Matrix3Xd shape = fit::shapeWithIdentity(basis, identity);
     Eigen::Matrix3Xd slots;
     const Eigen::Matrix2d from = expression::patchToFrame(layout, expression::projectAnchors(layout, identity, camera, label));
-    const Eigen::VectorXd d = expression::displacementsOf(from, expression::projectedLandmarks(basis, shape, camera, label, slots), landmarks);
+    const Eigen::VectorXd d = expression::displacementsOf(from, expression::projectedLandmarks(basis, shape, camera, label, slots),
+                                                          landmarks);
     return expression::displaced(expression::patchToFrame(layout, expression::projectAnchors(layout, identity, camera, turned)),
-                          expression::projectedLandmarks(basis, shape, camera, turned, slots), d);
+                                 expression::projectedLandmarks(basis, shape, camera, turned, slots), d);
 }
 
 }  // namespace facetrack::profile

@@ -38,8 +38,8 @@
 namespace facetrack::profile {
 
 struct ProfiledFace {
-    cv::Mat image;             ///< the turned face, same size and type as the source
-    double hidden_share = 0.0; ///< of the head's output pixels, the share whose surface was hidden in the source
+    cv::Mat image;              ///< the turned face, same size and type as the source
+    double hidden_share = 0.0;  ///< of the head's output pixels, the share whose surface was hidden in the source
 };
 
 /// `identity`: FaceModel::identityCount() values; `expression`: native

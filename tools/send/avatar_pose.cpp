@@ -26,9 +26,7 @@ Quaternion eyeFromRest(const HeadPose& pose, const EyeGaze& eye) {
     return fromEigen(Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), head.normalized()));
 }
 
-Quaternion fraction(const Quaternion& q, float s) {
-    return fromEigen(Eigen::Quaternionf::Identity().slerp(s, toEigen(q)));
-}
+Quaternion fraction(const Quaternion& q, float s) { return fromEigen(Eigen::Quaternionf::Identity().slerp(s, toEigen(q))); }
 
 Quaternion multiply(const Quaternion& a, const Quaternion& b) { return fromEigen(toEigen(a) * toEigen(b)); }
 

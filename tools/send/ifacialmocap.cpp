@@ -11,8 +11,7 @@
 namespace facetrack::send {
 
 std::optional<int> parseIFacialMocapHandshake(std::string_view datagram) {
-    while (!datagram.empty() && (datagram.back() == '\n' || datagram.back() == '\r' || datagram.back() == '\0'))
-        datagram.remove_suffix(1);
+    while (!datagram.empty() && (datagram.back() == '\n' || datagram.back() == '\r' || datagram.back() == '\0')) datagram.remove_suffix(1);
     if (datagram == kIFacialMocapHandshake) return 1;
     if (datagram.substr(0, kIFacialMocapHandshake.size()) == kIFacialMocapHandshake &&
         datagram.substr(kIFacialMocapHandshake.size()) == "|sendDataVersion=v2")

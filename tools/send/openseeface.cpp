@@ -40,9 +40,7 @@ private:
     std::vector<std::uint8_t>& out_;
 };
 
-float weight(const ExpressionResult* e, const char* name) {
-    return e ? e->arkit[static_cast<std::size_t>(arkitIndex(name))] : 0.f;
-}
+float weight(const ExpressionResult* e, const char* name) { return e ? e->arkit[static_cast<std::size_t>(arkitIndex(name))] : 0.f; }
 
 Point2 eyeCentre(const Landmarks68& l, int first) {
     Point2 c;
@@ -151,8 +149,8 @@ void OpenSeeFaceEncoder::encode(const FrameResult& frame, double time, std::vect
             w.f(std::fabs(outerUp - innerUp));       // quirk
         }
         for (const Side& side : kSides) {
-            w.f(weight(expression, side.smile) - weight(expression, side.frown));           // corner up-down
-            w.f(weight(expression, side.stretch) - weight(expression, "mouthPucker"));      // corner in-out
+            w.f(weight(expression, side.smile) - weight(expression, side.frown));       // corner up-down
+            w.f(weight(expression, side.stretch) - weight(expression, "mouthPucker"));  // corner in-out
         }
         w.f(open);
         w.f(both("mouthStretchLeft", "mouthStretchRight") - weight(expression, "mouthPucker"));

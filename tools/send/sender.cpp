@@ -18,18 +18,24 @@ Protocol parseProtocol(const std::string& name) {
 
 const char* protocolName(Protocol protocol) {
     switch (protocol) {
-        case Protocol::Vmc: return "vmc";
-        case Protocol::IFacialMocap: return "ifacialmocap";
-        case Protocol::OpenSeeFace: return "openseeface";
+        case Protocol::Vmc:
+            return "vmc";
+        case Protocol::IFacialMocap:
+            return "ifacialmocap";
+        case Protocol::OpenSeeFace:
+            return "openseeface";
     }
     return "?";
 }
 
 int defaultPort(Protocol protocol) {
     switch (protocol) {
-        case Protocol::Vmc: return 39539;
-        case Protocol::IFacialMocap: return kIFacialMocapPort;
-        case Protocol::OpenSeeFace: return kOpenSeeFacePort;
+        case Protocol::Vmc:
+            return 39539;
+        case Protocol::IFacialMocap:
+            return kIFacialMocapPort;
+        case Protocol::OpenSeeFace:
+            return kOpenSeeFacePort;
     }
     return 0;
 }
@@ -41,8 +47,7 @@ Sender::Sender(Protocol protocol, const std::string& to, std::shared_ptr<const F
         try {
             handshake_socket_.emplace(listenPort.value_or(kIFacialMocapPort));
         } catch (const Error& e) {
-            std::fprintf(stderr, "facetrack send: %s; sending to %s without waiting for a handshake\n", e.what(),
-                         to_.describe().c_str());
+            std::fprintf(stderr, "facetrack send: %s; sending to %s without waiting for a handshake\n", e.what(), to_.describe().c_str());
         }
     }
 }

@@ -29,7 +29,7 @@ struct SenderStats {
     long frames = 0;     ///< frames handed to send()
     long datagrams = 0;  ///< datagrams the kernel took
     long bytes = 0;
-    long failed = 0;     ///< datagrams not sent (no receiver, full queue): dropped, never retried
+    long failed = 0;  ///< datagrams not sent (no receiver, full queue): dropped, never retried
 };
 
 class Sender {
@@ -38,8 +38,7 @@ public:
     /// `listenPort` (default 49983) is where a receiver's handshake is heard;
     /// after one, frames go to the handshake's sender in its version. A port
     /// already taken is reported on stderr and frames go to `to` only.
-    Sender(Protocol protocol, const std::string& to, std::shared_ptr<const FaceModel> model,
-           std::optional<int> listenPort = std::nullopt);
+    Sender(Protocol protocol, const std::string& to, std::shared_ptr<const FaceModel> model, std::optional<int> listenPort = std::nullopt);
 
     /// Encodes the frame's first face (all faces for OpenSeeFace) and sends it. Never blocks.
     void send(const FrameResult& frame, double time_s);

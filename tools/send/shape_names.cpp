@@ -12,9 +12,7 @@ float w(const Weights& a, std::string_view name) { return a[static_cast<std::siz
 float both(const Weights& a, std::string_view left, std::string_view right) { return 0.5f * (w(a, left) + w(a, right)); }
 float unit(float x) { return std::clamp(x, 0.f, 1.f); }
 
-bool endsWith(std::string_view s, std::string_view tail) {
-    return s.size() >= tail.size() && s.substr(s.size() - tail.size()) == tail;
-}
+bool endsWith(std::string_view s, std::string_view tail) { return s.size() >= tail.size() && s.substr(s.size() - tail.size()) == tail; }
 }  // namespace
 
 std::string perfectSyncName(std::string_view arkit) {

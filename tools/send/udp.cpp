@@ -69,8 +69,8 @@ UdpSocket::~UdpSocket() {
 }
 
 bool UdpSocket::sendTo(const Endpoint& to, const void* data, std::size_t size) {
-    const ssize_t sent = ::sendto(fd_, data, size, MSG_DONTWAIT | MSG_NOSIGNAL,
-                                  reinterpret_cast<const sockaddr*>(&to.address), sizeof to.address);
+    const ssize_t sent = ::sendto(fd_, data, size, MSG_DONTWAIT | MSG_NOSIGNAL, reinterpret_cast<const sockaddr*>(&to.address),
+                                  sizeof to.address);
     return sent == static_cast<ssize_t>(size);
 }
 

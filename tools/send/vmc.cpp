@@ -64,9 +64,8 @@ private:
 };
 
 void bone(BundleWriter& writer, const Bone& b, const Quaternion& unity) {
-    writer.message("/VMC/Ext/Bone/Pos", [&](osc::OutboundPacketStream& s) {
-        s << b.name << b.x << b.y << b.z << unity.x << unity.y << unity.z << unity.w;
-    });
+    writer.message("/VMC/Ext/Bone/Pos",
+                   [&](osc::OutboundPacketStream& s) { s << b.name << b.x << b.y << b.z << unity.x << unity.y << unity.z << unity.w; });
 }
 
 void blend(BundleWriter& writer, const char* name, float value) {
@@ -78,9 +77,8 @@ void blend(BundleWriter& writer, const char* name, float value) {
 void encodeVmc(const FaceResult* face, double time_s, std::vector<std::vector<char>>& out) {
     BundleWriter writer(out);
     if (face && face->pose) {
-        writer.message("/VMC/Ext/Root/Pos", [](osc::OutboundPacketStream& s) {
-            s << "root" << 0.f << 0.f << 0.f << 0.f << 0.f << 0.f << 1.f;
-        });
+        writer.message("/VMC/Ext/Root/Pos",
+                       [](osc::OutboundPacketStream& s) { s << "root" << 0.f << 0.f << 0.f << 0.f << 0.f << 0.f << 1.f; });
         const Quaternion head = headFromRest(*face->pose);
         const Quaternion neck = fraction(head, kVmcNeckShare);
         bone(writer, kNeck, toUnity(neck));

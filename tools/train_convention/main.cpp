@@ -195,7 +195,8 @@ int main(int argc, char** argv) {
             int counted = 0;
             for (std::size_t k = 0; k < names.size(); ++k) {
                 const std::string mirror = fit::mirrorName(names[k]);
-                partner[k] = static_cast<std::size_t>(std::find(names.begin(), names.end(), mirror.empty() ? names[k] : mirror) - names.begin());
+                partner[k] = static_cast<std::size_t>(std::find(names.begin(), names.end(), mirror.empty() ? names[k] : mirror) -
+                                                      names.begin());
                 symmetric[k] = std::max(1e-4, 0.5 * (moment[k] + moment[partner[k]]));
                 if (names[k].rfind("eye", 0) == 0) continue;
                 logMean += std::log(symmetric[k]);
@@ -237,7 +238,8 @@ int main(int argc, char** argv) {
                             const double error = errorWith(trial);
                             if (error < bestError) bestError = error, factor = trial;
                         }
-                        std::printf("  sweep %d %-16s factor %.2f -> %.2f: %.4f\n", sweep + 1, names[k].c_str(), start, factor[k], bestError);
+                        std::printf("  sweep %d %-16s factor %.2f -> %.2f: %.4f\n", sweep + 1, names[k].c_str(), start, factor[k],
+                                    bestError);
                     }
                 for (std::size_t k = 0; k < names.size(); ++k) {
                     if (names[k].rfind("eye", 0) == 0) continue;
@@ -256,7 +258,8 @@ int main(int argc, char** argv) {
         Eigen::VectorXd before, after;
         const double rBefore = fitAll(fit::basisOf(model), settings, validation, nullptr, &before);
         const double rAfter = fitAll(std::make_shared<const fit::FitBasis>(basis), settings, validation, nullptr, &after);
-        std::printf("300-W validation, tracker's fit: residual %.4f -> %.4f; mean expression weights (before -> after):\n", rBefore, rAfter);
+        std::printf("300-W validation, tracker's fit: residual %.4f -> %.4f; mean expression weights (before -> after):\n", rBefore,
+                    rAfter);
         const auto names = fit::basisOf(model)->expressionNames(model::dataOf(*model));
         for (int k = 0; k < basis.expressionCount(); ++k)
             std::printf("  %-18s %.3f -> %.3f\n", names[static_cast<std::size_t>(k)].c_str(), before[k], after[k]);

@@ -89,8 +89,7 @@ float apertureOfClasses(const cv::Mat& classes) {
 
 struct Dataset {
     std::vector<EyeSample> eyes;
-    void add(const cv::Mat& gray, const Landmarks68& landmarks, const tools::TeacherRecord& teacher, bool trusted,
-             std::mt19937* jitter) {
+    void add(const cv::Mat& gray, const Landmarks68& landmarks, const tools::TeacherRecord& teacher, bool trusted, std::mt19937* jitter) {
         for (const Eye eye : {Eye::Left, Eye::Right}) {
             Point2 outer = landmarks[static_cast<std::size_t>(outerCorner(eye))];
             Point2 inner = landmarks[static_cast<std::size_t>(innerCorner(eye))];
@@ -158,8 +157,8 @@ void addFaces300W(Dataset& data, const std::string& shared, tools::Split split, 
     }
 }
 
-void addClip(Dataset& data, const std::string& shared, const std::map<std::string, tools::TeacherRecord>& teacher,
-             const std::string& clip, std::mt19937* jitter) {
+void addClip(Dataset& data, const std::string& shared, const std::map<std::string, tools::TeacherRecord>& teacher, const std::string& clip,
+             std::mt19937* jitter) {
     cv::VideoCapture video(shared + "/data/clips/" + clip);
     if (!video.isOpened()) throw Error("cannot open clip " + clip);
     Tracker tracker(landmarkModels(), unfiltered());
@@ -182,7 +181,9 @@ void addClip(Dataset& data, const std::string& shared, const std::map<std::strin
 tools::SyntheticFace randomTrainingFace(std::mt19937& rng, const std::vector<std::string>& names, unsigned seed) {
     std::uniform_real_distribution<float> unit(0.f, 1.f);
     const auto in = [&](float lo, float hi) { return lo + (hi - lo) * unit(rng); };
-    const auto index = [&](const std::string& n) { return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin()); };
+    const auto index = [&](const std::string& n) {
+        return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin());
+    };
     tools::SyntheticFace f;
     const float iod = in(35, 140);
     f.translation_mm = {in(-40, 40), in(-30, 30), f.fx * 62.3f / iod};
@@ -235,37 +236,38 @@ void trackTrainingRenders(int renders, unsigned seed, Visit visit) {
 /// few of. Their parameters come from their own generator (`seed`), not the
 /// one eval-gaze's renders use.
 void addSynthetic(Dataset& data, int renders, unsigned seed, std::mt19937& jitter) {
-    trackTrainingRenders(renders, seed, [&](const tools::SyntheticRenderer&, const tools::SyntheticFace&, const cv::Mat& image,
-                                            const tools::ClassMap& classes, const Landmarks68& landmarks) {
-        cv::Mat gray;
-        cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-        for (int variant = 0; variant < 2; ++variant) {
-            for (const Eye eye : {Eye::Left, Eye::Right}) {
-                Point2 outer = landmarks[static_cast<std::size_t>(outerCorner(eye))];
-                Point2 inner = landmarks[static_cast<std::size_t>(innerCorner(eye))];
-                if (variant == 1) {
-                    const float w = std::hypot(inner.x - outer.x, inner.y - outer.y);
-                    std::normal_distribution<float> n(0.f, 0.03f * w);
-                    outer.x += n(jitter), outer.y += n(jitter), inner.x += n(jitter), inner.y += n(jitter);
-                }
-                EyePatch patch;
-                if (!cutEyePatch(gray, outer, inner, eye == Eye::Left, patch)) continue;
-                EyeSample s;
-                s.patch = patch.pixels.clone();
-                s.classes = cv::Mat(kPatchHeight, kPatchWidth, CV_8U);
-                for (int y = 0; y < kPatchHeight; ++y) {
-                    for (int x = 0; x < kPatchWidth; ++x) {
-                        const Point2 p = toImage(patch, {static_cast<float>(x), static_cast<float>(y)});
-                        const int px = std::clamp(static_cast<int>(std::lround(p.x)), 0, classes.cols - 1);
-                        const int py = std::clamp(static_cast<int>(std::lround(p.y)), 0, classes.rows - 1);
-                        s.classes.at<std::uint8_t>(y, x) = classes.at<std::uint8_t>(py, px);
-                    }
-                }
-                s.labels.aperture = apertureOfClasses(s.classes);
-                data.eyes.push_back(std::move(s));
-            }
-        }
-    });
+    trackTrainingRenders(renders, seed,
+                         [&](const tools::SyntheticRenderer&, const tools::SyntheticFace&, const cv::Mat& image,
+                             const tools::ClassMap& classes, const Landmarks68& landmarks) {
+                             cv::Mat gray;
+                             cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+                             for (int variant = 0; variant < 2; ++variant) {
+                                 for (const Eye eye : {Eye::Left, Eye::Right}) {
+                                     Point2 outer = landmarks[static_cast<std::size_t>(outerCorner(eye))];
+                                     Point2 inner = landmarks[static_cast<std::size_t>(innerCorner(eye))];
+                                     if (variant == 1) {
+                                         const float w = std::hypot(inner.x - outer.x, inner.y - outer.y);
+                                         std::normal_distribution<float> n(0.f, 0.03f * w);
+                                         outer.x += n(jitter), outer.y += n(jitter), inner.x += n(jitter), inner.y += n(jitter);
+                                     }
+                                     EyePatch patch;
+                                     if (!cutEyePatch(gray, outer, inner, eye == Eye::Left, patch)) continue;
+                                     EyeSample s;
+                                     s.patch = patch.pixels.clone();
+                                     s.classes = cv::Mat(kPatchHeight, kPatchWidth, CV_8U);
+                                     for (int y = 0; y < kPatchHeight; ++y) {
+                                         for (int x = 0; x < kPatchWidth; ++x) {
+                                             const Point2 p = toImage(patch, {static_cast<float>(x), static_cast<float>(y)});
+                                             const int px = std::clamp(static_cast<int>(std::lround(p.x)), 0, classes.cols - 1);
+                                             const int py = std::clamp(static_cast<int>(std::lround(p.y)), 0, classes.rows - 1);
+                                             s.classes.at<std::uint8_t>(y, x) = classes.at<std::uint8_t>(py, px);
+                                         }
+                                     }
+                                     s.labels.aperture = apertureOfClasses(s.classes);
+                                     data.eyes.push_back(std::move(s));
+                                 }
+                             }
+                         });
 }
 
 int pixelClassOf(const EyeSample& e, int x, int y) {
@@ -364,7 +366,6 @@ void reportAperture(const PatchForest& forest, const Dataset& data, const char* 
                 absError / n, sumT / n, r, data.eyes.size());
 }
 
-
 /// The patches (float32 N x 28 x 40, normalised), every pixel's class (uint8,
 /// the teacher's lids and iris or a render's exact classes) and per eye
 /// (aperture, iris usable, synthetic) as float32 N x 3.
@@ -387,7 +388,6 @@ void writeSamples(const Dataset& data, const std::string& prefix) {
     std::printf("wrote %s_{patches,classes,info}.npy: %d eyes\n", prefix.c_str(), patches.rows());
 }
 
-
 /// The corner cascade's eyes: the frame, where the next patch is cut (first
 /// the landmarks' corners or jittered ones, then each stage's result) and the
 /// true corners.
@@ -395,7 +395,7 @@ struct CornerSample {
     int image = 0;  ///< into CornerSet::grays
     Point2 outer, inner, true_outer, true_inner;
     bool mirror = false;
-    float iod = 0.f;  ///< the face's inter-ocular distance, frame pixels
+    float iod = 0.f;        ///< the face's inter-ocular distance, frame pixels
     bool jittered = false;  ///< cut about the true corners, not at the landmarks'
 };
 
@@ -461,18 +461,19 @@ void addCorners300W(CornerSet& set, tools::Split split, std::mt19937* jitter, in
 /// (FaceModel::landmarkPoints), projected, so that the cascade reads corners in
 /// the 300-W annotators' convention on renders as on real faces.
 void addCornersSynthetic(CornerSet& set, int renders, unsigned seed, std::mt19937& jitter, int copies) {
-    trackTrainingRenders(renders, seed, [&](const tools::SyntheticRenderer& renderer, const tools::SyntheticFace& f, const cv::Mat& image,
-                                            const tools::ClassMap&, const Landmarks68& l) {
-        set.grays.emplace_back();
-        cv::cvtColor(image, set.grays.back(), cv::COLOR_BGR2GRAY);
-        const Landmarks68 truth = renderer.landmarks(f);
-        const float iod = renderer.interocularPx(f);
-        for (const Eye eye : {Eye::Left, Eye::Right}) {
-            const auto o = static_cast<std::size_t>(outerCorner(eye)), i = static_cast<std::size_t>(innerCorner(eye));
-            set.add(l[o], l[i], truth[o], truth[i], eye == Eye::Left, iod);
-            set.addJittered(truth[o], truth[i], eye == Eye::Left, iod, jitter, copies);
-        }
-    });
+    trackTrainingRenders(renders, seed,
+                         [&](const tools::SyntheticRenderer& renderer, const tools::SyntheticFace& f, const cv::Mat& image,
+                             const tools::ClassMap&, const Landmarks68& l) {
+                             set.grays.emplace_back();
+                             cv::cvtColor(image, set.grays.back(), cv::COLOR_BGR2GRAY);
+                             const Landmarks68 truth = renderer.landmarks(f);
+                             const float iod = renderer.interocularPx(f);
+                             for (const Eye eye : {Eye::Left, Eye::Right}) {
+                                 const auto o = static_cast<std::size_t>(outerCorner(eye)), i = static_cast<std::size_t>(innerCorner(eye));
+                                 set.add(l[o], l[i], truth[o], truth[i], eye == Eye::Left, iod);
+                                 set.addJittered(truth[o], truth[i], eye == Eye::Left, iod, jitter, copies);
+                             }
+                         });
 }
 
 /// Patches cut where each sample's corners are now, and the targets: the true
@@ -511,8 +512,10 @@ std::pair<double, double> cornerError(const CornerSet& set) {
         const float mx = 0.5f * (s.outer.x + s.inner.x - s.true_outer.x - s.true_inner.x);
         const float my = 0.5f * (s.outer.y + s.inner.y - s.true_outer.y - s.true_inner.y);
         along += std::fabs(mx * ax + my * ay) / std::hypot(ax, ay) / s.iod;
-        each += 0.5 * (std::hypot(s.outer.x - s.true_outer.x, s.outer.y - s.true_outer.y) +
-                       std::hypot(s.inner.x - s.true_inner.x, s.inner.y - s.true_inner.y)) / s.iod;
+        each += 0.5 *
+                (std::hypot(s.outer.x - s.true_outer.x, s.outer.y - s.true_outer.y) +
+                 std::hypot(s.inner.x - s.true_inner.x, s.inner.y - s.true_inner.y)) /
+                s.iod;
     }
     const double n = static_cast<double>(std::max<std::size_t>(1, set.samples.size()));
     return {100.0 * along / n, 100.0 * each / n};
@@ -530,8 +533,9 @@ std::vector<PatchForest> trainCornerCascade(CornerSet& train, std::vector<std::p
     const auto report = [&](const char* when) {
         for (const auto& [name, set] : reports) {
             const auto [along, each] = cornerError(*set);
-            std::printf("  %s, %s (%zu eyes): corner midpoint along the eye %.2f %%, corner distance %.2f %% of the inter-ocular distance\n",
-                        name, when, set->samples.size(), along, each);
+            std::printf(
+                "  %s, %s (%zu eyes): corner midpoint along the eye %.2f %%, corner distance %.2f %% of the inter-ocular distance\n", name,
+                when, set->samples.size(), along, each);
         }
         std::fflush(stdout);
     };
@@ -611,7 +615,8 @@ void calibrateOpenMap(EyeModelData& model, const Dataset& eyes, const Dataset& c
     report(train, model.open_map_scale, model.open_map_offset, "training clips");
     report(gaps(check), model.open_map_scale, model.open_map_offset, "held-out clips");
     char line[160];
-    std::snprintf(line, sizeof line, "; its open map's gap read as %.3f x %+.3f (least squares onto the pixel forest map's, %zu training-clip eyes)",
+    std::snprintf(line, sizeof line,
+                  "; its open map's gap read as %.3f x %+.3f (least squares onto the pixel forest map's, %zu training-clip eyes)",
                   model.open_map_scale, model.open_map_offset, train.net.size());
     provenance << line;
 }
@@ -648,8 +653,8 @@ int main(int argc, char** argv) {
     try {
         const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                                {"--out", "--holdout", "--pixel-trees", "--pixel-depth", "--aperture-trees", "--aperture-depth", "--seed",
-                                "--synthetic", "--samples-out", "--iris-net", "--from", "--corner-trees", "--corner-depth", "--corner-synthetic", "--corner-stages",
-                                "--net-map-radius"},
+                                "--synthetic", "--samples-out", "--iris-net", "--from", "--corner-trees", "--corner-depth",
+                                "--corner-synthetic", "--corner-stages", "--net-map-radius"},
                                {"--help", "--synthetic-pixels", "--corners"});
         if (args.has("--help")) {
             std::puts(kUsage);
@@ -660,7 +665,9 @@ int main(int argc, char** argv) {
         const std::string out = args.get("--out", "models/eye_model.ftm");
         const auto holdout = tools::splitList(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
         const auto start = std::chrono::steady_clock::now();
-        const std::function<double()> seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+        const std::function<double()> seconds = [&] {
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        };
         // The iris net in place of the pixel forest, its open map calibrated on the clips' eyes.
         const auto addIrisNet = [&](EyeModelData& model, std::ostringstream& provenance) {
             const std::string path = args.get("--iris-net", "");
@@ -700,8 +707,8 @@ int main(int argc, char** argv) {
             }
             std::printf("corner cascade: %zu training eyes (%zu images), %zu validation eyes, %zu kept-back render eyes\n",
                         train.samples.size(), train.grays.size(), validation.samples.size(), keptBack.samples.size());
-            std::vector<PatchForest> cascade =
-                trainCornerCascade(train, {{"300-W validation", &validation}, {"kept-back renders", &keptBack}}, args, seed);
+            std::vector<PatchForest> cascade = trainCornerCascade(
+                train, {{"300-W validation", &validation}, {"kept-back renders", &keptBack}}, args, seed);
             provenance << "; " << cascade.size() << " corner stages of " << cascade[0].treeCount() << " trees of depth " << cascade[0].depth
                        << " on the 300-W annotators' eye corners (train split, patches jittered about them) and " << synthetic
                        << " renders' exact corners";

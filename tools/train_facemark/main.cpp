@@ -64,8 +64,7 @@ int run(int argc, char** argv) {
     std::printf("training FacemarkLBF on %zu faces (validation and test held out)\n", train.size());
     const auto start = std::chrono::steady_clock::now();
     facemark->training();
-    std::printf("wrote %s in %.0f s\n", out.c_str(),
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    std::printf("wrote %s in %.0f s\n", out.c_str(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     return 0;
 }
 

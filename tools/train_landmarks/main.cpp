@@ -56,8 +56,8 @@ void progressBar(const std::string& label, double done) {
     lastLabel = label;
     lastPercent = percent;
     const int width = 30, filled = static_cast<int>(done * width + 0.5);
-    std::fprintf(stderr, "\r[%s%s] %3d%% %-40s", std::string(filled, '#').c_str(),
-                 std::string(width - filled, ' ').c_str(), percent, label.c_str());
+    std::fprintf(stderr, "\r[%s%s] %3d%% %-40s", std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(), percent,
+                 label.c_str());
     if (done >= 1.0) std::fputc('\n', stderr);
     std::fflush(stderr);
 }
@@ -139,11 +139,12 @@ Box jitter(const Box& b, float shift, float scale, std::mt19937_64& rng) {
 
 int run(int argc, char** argv) {
     const Args args(std::vector<std::string>(argv + 1, argv + argc),
-                         {"--data", "--out", "--stages", "--trees", "--depth", "--inits", "--threads", "--seed", "--ridge", "--hull-padding"},
-                         {"--resume", "--help"});
+                    {"--data", "--out", "--stages", "--trees", "--depth", "--inits", "--threads", "--seed", "--ridge", "--hull-padding"},
+                    {"--resume", "--help"});
     if (args.has("--help")) {
-        std::puts("usage: train_landmarks [--data DIR] [--out FILE] [--stages 7] [--trees 4] [--depth 5] [--inits 6]\n"
-                  "                       [--threads 2] [--seed 1] [--ridge 15000] [--hull-padding 0.1] [--resume]");
+        std::puts(
+            "usage: train_landmarks [--data DIR] [--out FILE] [--stages 7] [--trees 4] [--depth 5] [--inits 6]\n"
+            "                       [--threads 2] [--seed 1] [--ridge 15000] [--hull-padding 0.1] [--resume]");
         return 0;
     }
     setLogHandler({});
@@ -237,9 +238,13 @@ int run(int argc, char** argv) {
         for (int k = 0; k < inits; ++k) {
             Shape68 shape;
             switch (k % 6) {
-                case 0: shape = onBox(prior, k == 0 ? box : jitter(box, 0.05f, 0.05f, rng)); break;
+                case 0:
+                    shape = onBox(prior, k == 0 ? box : jitter(box, 0.05f, 0.05f, rng));
+                    break;
                 case 1:
-                case 2: shape = onBox(prior, jitter(box, 0.05f, 0.05f, rng)); break;
+                case 2:
+                    shape = onBox(prior, jitter(box, 0.05f, 0.05f, rng));
+                    break;
                 case 3:
                 case 4: {
                     const int j = anyImage(rng);

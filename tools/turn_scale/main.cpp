@@ -103,8 +103,9 @@ int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc), {"--profiled", "--labels", "--faces300w", "--photographs"},
                            {"--help"});
     if (args.has("--help")) {
-        std::puts("usage: turn_scale [--profiled build/profiled/validation] [--labels build/dense_labels] [--faces300w DIR]\n"
-                  "       turn_scale --photographs train|validation|test [--faces300w DIR]");
+        std::puts(
+            "usage: turn_scale [--profiled build/profiled/validation] [--labels build/dense_labels] [--faces300w DIR]\n"
+            "       turn_scale --photographs train|validation|test [--faces300w DIR]");
         return 0;
     }
     const std::string root = tools::faces300wRoot(args.get("--faces300w", ""));
@@ -119,11 +120,13 @@ int run(int argc, char** argv) {
 
     const auto withConvention = FaceModel::loadDefault();
     const auto bare = FaceModel::load(withConvention->sourcePath());
-    const std::vector<Variant> variants = {{"shipped", withConvention}, {"own identity", withConvention, true},
-                                           {"no convention", bare}, {"no jaw sides", withConvention, false, true}};
-    std::vector<double> turns;                                 // per copy, its known turn (deg)
+    const std::vector<Variant> variants = {{"shipped", withConvention},
+                                           {"own identity", withConvention, true},
+                                           {"no convention", bare},
+                                           {"no jaw sides", withConvention, false, true}};
+    std::vector<double> turns;                                  // per copy, its known turn (deg)
     std::vector<std::vector<double>> changes(variants.size());  // per variant and copy, the fitted yaw's change
-    std::map<std::string, std::vector<double>> photographYaw;  // per photograph, per variant
+    std::map<std::string, std::vector<double>> photographYaw;   // per photograph, per variant
 
     std::ifstream poses(profiled + "/poses.csv");
     if (!poses) throw Error("cannot read " + profiled + "/poses.csv (make_profiled_faces writes it)");

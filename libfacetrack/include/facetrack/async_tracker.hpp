@@ -64,9 +64,9 @@ struct AsyncOptions {
 /// One tracked frame, as latest() hands it over.
 struct AsyncResult {
     FrameResult result;
-    long frame_number = -1;      ///< frames read from the source before this one (0 is the first)
-    double time_s = 0.0;         ///< the frame's timestamp from the source
-    double latency_ms = 0.0;     ///< from the frame's arrival (read returning) to its result being ready
+    long frame_number = -1;   ///< frames read from the source before this one (0 is the first)
+    double time_s = 0.0;      ///< the frame's timestamp from the source
+    double latency_ms = 0.0;  ///< from the frame's arrival (read returning) to its result being ready
     /// When the frame arrived, for timing what the application does with the
     /// result afterwards (a sender's capture-to-packet latency).
     std::chrono::steady_clock::time_point arrival;
@@ -75,18 +75,17 @@ struct AsyncResult {
 struct AsyncStats {
     long frames_read = 0;
     long frames_tracked = 0;
-    long frames_dropped = 0;     ///< read but replaced by a newer frame before the tracker took them
+    long frames_dropped = 0;  ///< read but replaced by a newer frame before the tracker took them
     double mean_latency_ms = 0.0;
-    bool finished = false;       ///< the source ended (or failed: see error), nothing more will come
-    std::string error;           ///< why the source or the tracker stopped, if they failed
+    bool finished = false;  ///< the source ended (or failed: see error), nothing more will come
+    std::string error;      ///< why the source or the tracker stopped, if they failed
 };
 
 class AsyncTracker {
 public:
     /// Starts reading and tracking at once. Throws Error when the Tracker
     /// cannot be set up or `source` is null.
-    AsyncTracker(Models models, const TrackerConfig& config, std::unique_ptr<FrameSource> source,
-                 const AsyncOptions& options = {});
+    AsyncTracker(Models models, const TrackerConfig& config, std::unique_ptr<FrameSource> source, const AsyncOptions& options = {});
     /// Stops both threads (waiting at most for the source's read timeout).
     ~AsyncTracker();
     AsyncTracker(const AsyncTracker&) = delete;

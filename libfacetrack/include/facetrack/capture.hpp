@@ -43,11 +43,11 @@ std::string toString(CaptureFormat format);
 
 struct CaptureSettings {
     std::string device = "/dev/video0";
-    int width = 640;          ///< requested; the driver may pick the nearest size it has
+    int width = 640;  ///< requested; the driver may pick the nearest size it has
     int height = 480;
-    double fps = 30.0;        ///< requested; not every driver honours it
+    double fps = 30.0;  ///< requested; not every driver honours it
     CaptureFormat format = CaptureFormat::Auto;
-    int timeout_ms = 2000;    ///< read() gives up waiting for a frame after this long
+    int timeout_ms = 2000;  ///< read() gives up waiting for a frame after this long
 };
 
 /// A frame in BGR, owned. read() reuses the buffer: no allocation per frame
@@ -56,8 +56,8 @@ struct CapturedFrame {
     std::vector<std::uint8_t> bgr;
     int width = 0;
     int height = 0;
-    double timestamp_s = 0.0;   ///< steady clock, from when the camera was opened
-    std::uint64_t sequence = 0; ///< frames delivered so far, from 1
+    double timestamp_s = 0.0;    ///< steady clock, from when the camera was opened
+    std::uint64_t sequence = 0;  ///< frames delivered so far, from 1
 
     ImageView view() const { return {bgr.data(), width, height, static_cast<std::size_t>(width) * 3, PixelFormat::Bgr8}; }
 };

@@ -21,8 +21,8 @@
 namespace facetrack {
 
 struct Detection {
-    Box box;           ///< image pixels, 0-based
-    float score = 0.f; ///< 0..1
+    Box box;            ///< image pixels, 0-based
+    float score = 0.f;  ///< 0..1
 };
 
 enum class DetectorKind {
@@ -39,8 +39,8 @@ struct DetectorConfig {
     /// must also be confirmed at a second, smaller input size, which rejects
     /// its false alarms on featureless frames (docs/detector.md).
     float min_score = 0.5f;
-    int detect_width = 320;    ///< frames wider than this are downscaled to it before detection
-    int max_faces = 8;         ///< keep at most this many, highest score first
+    int detect_width = 320;  ///< frames wider than this are downscaled to it before detection
+    int max_faces = 8;       ///< keep at most this many, highest score first
 };
 
 /// One detector instance is used by one thread at a time (OpenCV's networks

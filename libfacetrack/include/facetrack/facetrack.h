@@ -71,18 +71,18 @@ typedef struct ft_tracker ft_tracker;
 
 typedef struct ft_tracker_config {
     uint32_t struct_size;
-    int32_t max_faces;            /* faces followed at once (1) */
-    float horizontal_fov_deg;     /* the webcam's field of view (60) */
-    float focal_length_px;        /* > 0: use it instead of the field of view (0) */
-    int32_t filter_enabled;       /* the 1-euro filter (1) */
-    float filter_min_cutoff_hz;   /* (1) */
-    float filter_beta;            /* (2) */
-    int32_t calibration_frames;   /* identity from this many samples; 0: mean face (30) */
-    float expression_prior;       /* factor on the fit's learned expression prior, (0, 100] (1) */
-    int32_t landmark_starts;      /* landmark passes averaged, 1..9; each ~0.2 ms (3) */
+    int32_t max_faces;          /* faces followed at once (1) */
+    float horizontal_fov_deg;   /* the webcam's field of view (60) */
+    float focal_length_px;      /* > 0: use it instead of the field of view (0) */
+    int32_t filter_enabled;     /* the 1-euro filter (1) */
+    float filter_min_cutoff_hz; /* (1) */
+    float filter_beta;          /* (2) */
+    int32_t calibration_frames; /* identity from this many samples; 0: mean face (30) */
+    float expression_prior;     /* factor on the fit's learned expression prior, (0, 100] (1) */
+    int32_t landmark_starts;    /* landmark passes averaged, 1..9; each ~0.2 ms (3) */
     /* Added after the first release of this struct: an older caller's struct_size ends before it
        and it keeps its default. */
-    int32_t cnn_stage;            /* the CNN file's cascade stages: the shipped expression net, ~0.3 ms (1) */
+    int32_t cnn_stage; /* the CNN file's cascade stages: the shipped expression net, ~0.3 ms (1) */
 } ft_tracker_config;
 
 typedef struct ft_timing {
@@ -92,7 +92,7 @@ typedef struct ft_timing {
 
 typedef struct ft_frame_result {
     uint32_t struct_size;
-    int32_t face_count;          /* read each with ft_tracker_face */
+    int32_t face_count; /* read each with ft_tracker_face */
     float camera_fx, camera_fy, camera_cx, camera_cy;
     int32_t timing_count;
     ft_timing timings[FT_MAX_TIMINGS];
@@ -101,14 +101,14 @@ typedef struct ft_frame_result {
 typedef struct ft_face {
     uint32_t struct_size;
     int32_t id;
-    int32_t tracked;             /* 1: followed from the previous frame */
+    int32_t tracked; /* 1: followed from the previous frame */
     float confidence;
-    float box[4];                /* x0, y0, x1, y1 pixels */
+    float box[4]; /* x0, y0, x1, y1 pixels */
     int32_t has_landmarks;
     float landmarks[2 * FT_LANDMARK_COUNT]; /* x0, y0, x1, y1, ... pixels */
     int32_t has_pose;
-    float rotation_wxyz[4];      /* x_camera = R x_model + t */
-    float euler_deg[3];          /* pitch, yaw, roll */
+    float rotation_wxyz[4]; /* x_camera = R x_model + t */
+    float euler_deg[3];     /* pitch, yaw, roll */
     float translation_mm[3];
     float camera_from_model[16]; /* column-major */
     float gl_model_view[16];     /* column-major, OpenGL's eye frame */

@@ -65,12 +65,12 @@ struct ExpressionResult {
 /// One eye's gaze (the gaze stage, docs/gaze.md). Yaw and pitch are in the
 /// head's frame: 0, 0 looks straight out of the face.
 struct EyeGaze {
-    Vec3 direction;        ///< unit vector in the camera frame, from the eyeball centre
-    Vec3 direction_head;   ///< the same in the model (head) frame
-    float yaw_deg = 0.f;   ///< > 0: towards the subject's left (the image's right for a face looking at the camera)
-    float pitch_deg = 0.f; ///< > 0: up
-    float openness = 0.f;  ///< 0 closed .. 1 open (the lid aperture over this face's open-eye aperture)
-    Point2 pupil_px;       ///< the iris centre in the frame, pixels
+    Vec3 direction;         ///< unit vector in the camera frame, from the eyeball centre
+    Vec3 direction_head;    ///< the same in the model (head) frame
+    float yaw_deg = 0.f;    ///< > 0: towards the subject's left (the image's right for a face looking at the camera)
+    float pitch_deg = 0.f;  ///< > 0: up
+    float openness = 0.f;   ///< 0 closed .. 1 open (the lid aperture over this face's open-eye aperture)
+    Point2 pupil_px;        ///< the iris centre in the frame, pixels
 };
 
 struct GazeResult {
@@ -88,8 +88,9 @@ struct FaceEstimates {
 };
 
 struct FaceResult {
-    int id = 0;               ///< stable while the face is followed, also when the tracker finds it again near where it was; a face lost and found by a new search gets a new id
-    bool tracked = false;     ///< true when followed from the previous frame, false when freshly detected
+    int id =
+        0;  ///< stable while the face is followed, also when the tracker finds it again near where it was; a face lost and found by a new search gets a new id
+    bool tracked = false;  ///< true when followed from the previous frame, false when freshly detected
     /// 0..1: 1 - fit_residual / TrackerConfig::max_fit_residual once fitted;
     /// the detector's score when the landmarks stage is not available.
     float confidence = 0.f;
@@ -108,7 +109,7 @@ struct FaceResult {
     /// before calibration, i.e. the mean face.
     std::vector<float> identity;
     bool identity_calibrated = false;
-    FaceEstimates raw;        ///< landmarks, pose and expression before temporal filtering (see FaceEstimates)
+    FaceEstimates raw;  ///< landmarks, pose and expression before temporal filtering (see FaceEstimates)
 };
 
 /// The pinhole camera the fit assumed (TrackerConfig::camera): a camera-frame
@@ -121,9 +122,9 @@ struct CameraIntrinsics {
 
 /// One entry of Tracker::stages(). The same names label FrameResult::timings.
 struct StageInfo {
-    std::string name;       ///< "detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "neutral"
+    std::string name;  ///< "detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "neutral"
     bool available = false;
-    std::string detail;     ///< what implements it, or why it is not available
+    std::string detail;  ///< what implements it, or why it is not available
 };
 
 /// Wall-clock time one stage took on this frame, summed over faces.

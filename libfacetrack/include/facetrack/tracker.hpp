@@ -27,10 +27,10 @@ namespace facetrack {
 /// The models a Tracker uses, loaded once and shared (immutable) by any
 /// number of Trackers on any threads.
 struct Models {
-    std::shared_ptr<const FaceModel> face;            ///< required
-    std::shared_ptr<const LandmarkModel> landmarks;   ///< null: the landmarks stage is not available
-    std::shared_ptr<const EyeModel> eyes;             ///< null: the gaze stage is not available
-    std::shared_ptr<const CnnModel> cnn;              ///< null: the cnn stage is not available
+    std::shared_ptr<const FaceModel> face;           ///< required
+    std::shared_ptr<const LandmarkModel> landmarks;  ///< null: the landmarks stage is not available
+    std::shared_ptr<const EyeModel> eyes;            ///< null: the gaze stage is not available
+    std::shared_ptr<const CnnModel> cnn;             ///< null: the cnn stage is not available
 
     /// The shipped models from modelDirectory(). A missing landmark, eye or
     /// CNN model leaves its pointer null (and is logged); any other problem throws Error.
@@ -54,7 +54,7 @@ struct CameraConfig {
 /// and far faces.
 struct FilterConfig {
     bool enabled = true;
-    double min_cutoff_hz = 1.0;         ///< cutoff at rest: lower = steadier
+    double min_cutoff_hz = 1.0;  ///< cutoff at rest: lower = steadier
     /// How fast the cutoff rises with speed: higher = less lag. The landmarks'
     /// cutoff rises with their own speed and, 5x as fast, with the whole face's.
     double beta = 2.0;

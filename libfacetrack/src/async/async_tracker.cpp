@@ -166,8 +166,7 @@ void AsyncTracker::Impl::track() {
     result_ready.notify_all();
 }
 
-AsyncTracker::AsyncTracker(Models models, const TrackerConfig& config, std::unique_ptr<FrameSource> source,
-                           const AsyncOptions& options) {
+AsyncTracker::AsyncTracker(Models models, const TrackerConfig& config, std::unique_ptr<FrameSource> source, const AsyncOptions& options) {
     if (!source) throw Error("AsyncTracker: no frame source");
     impl_ = std::make_unique<Impl>(std::move(models), config, std::move(source), options);
     impl_->reader = std::thread([this] { impl_->read(); });
@@ -197,8 +196,7 @@ bool AsyncTracker::latest(AsyncResult& out) const {
 bool AsyncTracker::waitForNewer(AsyncResult& out, double timeout_s) const {
     std::unique_lock<std::mutex> lock(impl_->result_mutex);
     const auto newer = [&] { return impl_->published.frame_number > out.frame_number; };
-    impl_->result_ready.wait_for(lock, std::chrono::duration<double>(std::max(0.0, timeout_s)),
-                                 [&] { return newer() || impl_->finished; });
+    impl_->result_ready.wait_for(lock, std::chrono::duration<double>(std::max(0.0, timeout_s)), [&] { return newer() || impl_->finished; });
     if (!newer()) return false;
     out = impl_->published;
     return true;

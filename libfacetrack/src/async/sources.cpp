@@ -26,8 +26,10 @@ public:
                 frame = frame_.view();
                 time_s = frame_.timestamp_s;
                 return Status::Frame;
-            case CaptureStatus::Timeout: return Status::Timeout;
-            case CaptureStatus::Disconnected: return Status::Disconnected;
+            case CaptureStatus::Timeout:
+                return Status::Timeout;
+            case CaptureStatus::Disconnected:
+                return Status::Disconnected;
         }
         return Status::Disconnected;
     }

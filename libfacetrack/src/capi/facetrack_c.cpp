@@ -57,11 +57,16 @@ ft_status copyOut(const T& full, T* out) {
 
 facetrack::PixelFormat pixelFormatOf(ft_pixel_format format) {
     switch (format) {
-        case FT_PIXEL_GRAY8: return facetrack::PixelFormat::Gray8;
-        case FT_PIXEL_BGR8: return facetrack::PixelFormat::Bgr8;
-        case FT_PIXEL_RGB8: return facetrack::PixelFormat::Rgb8;
-        case FT_PIXEL_BGRA8: return facetrack::PixelFormat::Bgra8;
-        case FT_PIXEL_RGBA8: return facetrack::PixelFormat::Rgba8;
+        case FT_PIXEL_GRAY8:
+            return facetrack::PixelFormat::Gray8;
+        case FT_PIXEL_BGR8:
+            return facetrack::PixelFormat::Bgr8;
+        case FT_PIXEL_RGB8:
+            return facetrack::PixelFormat::Rgb8;
+        case FT_PIXEL_BGRA8:
+            return facetrack::PixelFormat::Bgra8;
+        case FT_PIXEL_RGBA8:
+            return facetrack::PixelFormat::Rgba8;
     }
     throw facetrack::Error("unknown pixel format " + std::to_string(format));
 }
@@ -113,8 +118,7 @@ void ft_tracker_config_init(ft_tracker_config* config) {
     config->cnn_stage = defaults.cnn_stage ? 1 : 0;
 }
 
-ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* config, ft_tracker** out, char* error,
-                            uint32_t error_size) {
+ft_status ft_tracker_create(const ft_models* models, const ft_tracker_config* config, ft_tracker** out, char* error, uint32_t error_size) {
     if (!out) return FT_INVALID_ARGUMENT;
     *out = nullptr;
     if (!models) {
@@ -182,8 +186,7 @@ ft_status ft_tracker_process(ft_tracker* tracker, const uint8_t* pixels, int32_t
 
 ft_status ft_tracker_face(const ft_tracker* tracker, int32_t index, ft_face* face) {
     if (!tracker) return FT_INVALID_ARGUMENT;
-    if (index < 0 || index >= static_cast<int32_t>(tracker->last.faces.size()) || !face ||
-        face->struct_size < sizeof(uint32_t)) {
+    if (index < 0 || index >= static_cast<int32_t>(tracker->last.faces.size()) || !face || face->struct_size < sizeof(uint32_t)) {
         return FT_INVALID_ARGUMENT;
     }
     const facetrack::FaceResult& f = tracker->last.faces[static_cast<std::size_t>(index)];

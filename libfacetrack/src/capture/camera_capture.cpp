@@ -36,9 +36,7 @@ std::string fourccName(std::uint32_t code) {
     return name;
 }
 
-std::uint32_t fourccOf(CaptureFormat format) {
-    return format == CaptureFormat::Mjpeg ? V4L2_PIX_FMT_MJPEG : V4L2_PIX_FMT_YUYV;
-}
+std::uint32_t fourccOf(CaptureFormat format) { return format == CaptureFormat::Mjpeg ? V4L2_PIX_FMT_MJPEG : V4L2_PIX_FMT_YUYV; }
 
 std::string presentDevices() {
     const auto devices = CameraCapture::listDevices();
@@ -51,7 +49,6 @@ std::string presentDevices() {
 bool isGone(int error) { return error == ENODEV || error == ENXIO || error == EIO; }
 
 }  // namespace
-
 
 std::vector<std::string> CameraCapture::listDevices() {
     std::vector<std::string> devices;
@@ -115,8 +112,7 @@ struct CameraCapture::Impl {
         const std::string cause = std::strerror(error);
         close();
         if (error == EBUSY) {
-            throw Error("camera " + device + " is busy: another program is using it (close it, or find it with 'fuser " +
-                        device + "')");
+            throw Error("camera " + device + " is busy: another program is using it (close it, or find it with 'fuser " + device + "')");
         }
         if (isGone(error)) throw Error("camera " + device + " went away while " + what + " (unplugged?)");
         throw Error("camera " + device + ": " + what + " failed: " + cause);
@@ -176,9 +172,7 @@ struct CameraCapture::Impl {
 
     void negotiateFormat(const CaptureSettings& s) {
         const auto offered = offeredFormats();
-        const auto has = [&](CaptureFormat f) {
-            return std::find(offered.begin(), offered.end(), fourccOf(f)) != offered.end();
-        };
+        const auto has = [&](CaptureFormat f) { return std::find(offered.begin(), offered.end(), fourccOf(f)) != offered.end(); };
         CaptureFormat chosen = s.format;
         if (chosen == CaptureFormat::Auto) {
             // YUYV needs no decoding but 2 bytes per pixel over USB: above
@@ -196,9 +190,8 @@ struct CameraCapture::Impl {
             }
             close();
             throw Error(device + " (" + card + ") does not offer " +
-                        (s.format == CaptureFormat::Auto ? std::string("YUYV or MJPEG") : fourccName(fourccOf(chosen))) +
-                        "; it offers:" + (list.empty() ? std::string(" nothing") : list) +
-                        " (see 'v4l2-ctl -d " + device + " --list-formats-ext')");
+                        (s.format == CaptureFormat::Auto ? std::string("YUYV or MJPEG") : fourccName(fourccOf(chosen))) + "; it offers:" +
+                        (list.empty() ? std::string(" nothing") : list) + " (see 'v4l2-ctl -d " + device + " --list-formats-ext')");
         }
 
         v4l2_format fmt{};
@@ -230,8 +223,7 @@ struct CameraCapture::Impl {
         parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(std::lround(requested * 1000.0));
         // Not every driver lets the rate be set; then it runs at its own.
         if (xioctl(VIDIOC_S_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0) {
-            fps = static_cast<double>(parm.parm.capture.timeperframe.denominator) /
-                  parm.parm.capture.timeperframe.numerator;
+            fps = static_cast<double>(parm.parm.capture.timeperframe.denominator) / parm.parm.capture.timeperframe.numerator;
         } else {
             fps = requested;
         }

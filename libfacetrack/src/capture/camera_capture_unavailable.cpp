@@ -11,8 +11,9 @@ struct CameraCapture::Impl {};
 
 namespace {
 [[noreturn]] void unavailable() {
-    throw Error("camera capture is not in this build of facetrack (configured with FACETRACK_WITH_V4L2=OFF); "
-                "read a clip or images instead");
+    throw Error(
+        "camera capture is not in this build of facetrack (configured with FACETRACK_WITH_V4L2=OFF); "
+        "read a clip or images instead");
 }
 }  // namespace
 

@@ -18,8 +18,8 @@ void yuyvToBgr(const std::uint8_t* yuyv, std::size_t size, int width, int height
     // The last row only needs its pixels, not a whole stride.
     const std::size_t needed = stride * static_cast<std::size_t>(height - 1) + static_cast<std::size_t>(width) * 2;
     if (size < needed) {
-        throw Error("YUYV frame: " + std::to_string(size) + " bytes, " + std::to_string(needed) + " needed for " +
-                    std::to_string(width) + "x" + std::to_string(height));
+        throw Error("YUYV frame: " + std::to_string(size) + " bytes, " + std::to_string(needed) + " needed for " + std::to_string(width) +
+                    "x" + std::to_string(height));
     }
     const cv::Mat packed(height, width, CV_8UC2, const_cast<std::uint8_t*>(yuyv), stride);
     cv::cvtColor(packed, bgr, cv::COLOR_YUV2BGR_YUYV);
@@ -49,9 +49,12 @@ namespace facetrack {
 
 std::string toString(CaptureFormat format) {
     switch (format) {
-        case CaptureFormat::Auto: return "auto";
-        case CaptureFormat::Yuyv: return "yuyv";
-        case CaptureFormat::Mjpeg: return "mjpeg";
+        case CaptureFormat::Auto:
+            return "auto";
+        case CaptureFormat::Yuyv:
+            return "yuyv";
+        case CaptureFormat::Mjpeg:
+            return "mjpeg";
     }
     return "?";
 }

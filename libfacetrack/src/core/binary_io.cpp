@@ -57,8 +57,8 @@ void BinaryReader::expectEnd() const {
 }
 
 void BinaryReader::fail(const std::string& reading) const {
-    throw Error(what_ + ": truncated or corrupt (reading " + reading + " at byte " + std::to_string(pos_) +
-                " of " + std::to_string(bytes_.size()) + ")");
+    throw Error(what_ + ": truncated or corrupt (reading " + reading + " at byte " + std::to_string(pos_) + " of " +
+                std::to_string(bytes_.size()) + ")");
 }
 
 const char* BinaryReader::take(std::size_t n) {
@@ -68,8 +68,7 @@ const char* BinaryReader::take(std::size_t n) {
     return p;
 }
 
-void writeModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
-                    const std::string& payload) {
+void writeModelFile(const std::string& path, std::string_view magic, std::uint32_t version, const std::string& payload) {
     BinaryWriter header;
     const std::string m = paddedMagic(magic);
     header.putArray(m.data(), m.size());
@@ -85,8 +84,7 @@ void writeModelFile(const std::string& path, std::string_view magic, std::uint32
     if (!out.flush()) throw Error("cannot write '" + path + "': " + std::strerror(errno));
 }
 
-std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
-                          const std::string& kind) {
+std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t version, const std::string& kind) {
     std::uint32_t fileVersion = 0;
     return readModelFile(path, magic, version, version, kind, fileVersion);
 }
@@ -122,8 +120,8 @@ std::string readModelFile(const std::string& path, std::string_view magic, std::
     const auto payloadSize = header.get<std::uint64_t>();
     const auto checksum = header.get<std::uint64_t>();
     if (bytes.size() - kHeaderSize != payloadSize) {
-        throw Error(what + ": truncated or padded (payload " + std::to_string(bytes.size() - kHeaderSize) +
-                    " bytes, header says " + std::to_string(payloadSize) + ")");
+        throw Error(what + ": truncated or padded (payload " + std::to_string(bytes.size() - kHeaderSize) + " bytes, header says " +
+                    std::to_string(payloadSize) + ")");
     }
     if (fnv1a64(bytes.data() + kHeaderSize, payloadSize) != checksum) {
         throw Error(what + ": corrupt (checksum mismatch)");

@@ -105,14 +105,12 @@ private:
 /// A whole file's bytes; `what` names it in the Error thrown when it cannot be opened or read.
 std::string readFileBytes(const std::string& path, const std::string& what);
 
-void writeModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
-                    const std::string& payload);
+void writeModelFile(const std::string& path, std::string_view magic, std::uint32_t version, const std::string& payload);
 
 /// Reads and validates the container; returns the payload. Throws Error naming
 /// the file when it is missing, truncated, not of this kind (magic), of
 /// another version, or fails the checksum. `kind` is a human name for messages.
-std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t version,
-                          const std::string& kind);
+std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t version, const std::string& kind);
 /// The same for a format this build reads in versions oldest..newest; the
 /// file's version goes to `fileVersion`.
 std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t oldest, std::uint32_t newest,

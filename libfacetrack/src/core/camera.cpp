@@ -19,8 +19,7 @@ Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx,
         c.fx = focalPx;
     } else {
         if (!(horizontalFovDeg > 1.0 && horizontalFovDeg < 179.0)) {
-            throw Error("camera: horizontal field of view " + std::to_string(horizontalFovDeg) +
-                        " deg is outside (1, 179)");
+            throw Error("camera: horizontal field of view " + std::to_string(horizontalFovDeg) + " deg is outside (1, 179)");
         }
         c.fx = 0.5 * width / std::tan(0.5 * horizontalFovDeg * core::kRadiansPerDegree);
     }

@@ -21,7 +21,6 @@ struct Camera {
 /// principalY) when both are >= 0, else the image centre. Throws Error on a
 /// non-positive size, a field of view outside (1, 179) degrees, or a
 /// non-finite value.
-Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx, double principalX = -1.0,
-                 double principalY = -1.0);
+Camera cameraFor(int width, int height, double horizontalFovDeg, double focalPx, double principalX = -1.0, double principalY = -1.0);
 
 }  // namespace facetrack::core

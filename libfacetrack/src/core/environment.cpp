@@ -68,9 +68,7 @@ std::string modelDirectory() {
 namespace {
 std::mutex logMutex;
 std::function<void(const std::string&)>& logHandler() {
-    static std::function<void(const std::string&)> handler = [](const std::string& line) {
-        std::cerr << "facetrack: " << line << '\n';
-    };
+    static std::function<void(const std::string&)> handler = [](const std::string& line) { std::cerr << "facetrack: " << line << '\n'; };
     return handler;
 }
 }  // namespace

@@ -18,11 +18,14 @@ namespace facetrack {
 
 int bytesPerPixel(PixelFormat format) {
     switch (format) {
-        case PixelFormat::Gray8: return 1;
+        case PixelFormat::Gray8:
+            return 1;
         case PixelFormat::Bgr8:
-        case PixelFormat::Rgb8: return 3;
+        case PixelFormat::Rgb8:
+            return 3;
         case PixelFormat::Bgra8:
-        case PixelFormat::Rgba8: return 4;
+        case PixelFormat::Rgba8:
+            return 4;
     }
     throw Error("unknown pixel format " + std::to_string(static_cast<int>(format)));
 }
@@ -47,11 +50,20 @@ cv::Mat toBgr(const ImageView& view) {
     const cv::Mat src = wrap(view);
     cv::Mat bgr;
     switch (view.format) {
-        case PixelFormat::Bgr8: return src;
-        case PixelFormat::Gray8: cv::cvtColor(src, bgr, cv::COLOR_GRAY2BGR); break;
-        case PixelFormat::Rgb8: cv::cvtColor(src, bgr, cv::COLOR_RGB2BGR); break;
-        case PixelFormat::Bgra8: cv::cvtColor(src, bgr, cv::COLOR_BGRA2BGR); break;
-        case PixelFormat::Rgba8: cv::cvtColor(src, bgr, cv::COLOR_RGBA2BGR); break;
+        case PixelFormat::Bgr8:
+            return src;
+        case PixelFormat::Gray8:
+            cv::cvtColor(src, bgr, cv::COLOR_GRAY2BGR);
+            break;
+        case PixelFormat::Rgb8:
+            cv::cvtColor(src, bgr, cv::COLOR_RGB2BGR);
+            break;
+        case PixelFormat::Bgra8:
+            cv::cvtColor(src, bgr, cv::COLOR_BGRA2BGR);
+            break;
+        case PixelFormat::Rgba8:
+            cv::cvtColor(src, bgr, cv::COLOR_RGBA2BGR);
+            break;
     }
     return bgr;
 }
@@ -59,11 +71,20 @@ cv::Mat toBgr(const ImageView& view) {
 cv::Mat toGray(const ImageView& view, cv::Mat& gray) {
     const cv::Mat src = wrap(view);
     switch (view.format) {
-        case PixelFormat::Gray8: return src;
-        case PixelFormat::Bgr8: cv::cvtColor(src, gray, cv::COLOR_BGR2GRAY); break;
-        case PixelFormat::Rgb8: cv::cvtColor(src, gray, cv::COLOR_RGB2GRAY); break;
-        case PixelFormat::Bgra8: cv::cvtColor(src, gray, cv::COLOR_BGRA2GRAY); break;
-        case PixelFormat::Rgba8: cv::cvtColor(src, gray, cv::COLOR_RGBA2GRAY); break;
+        case PixelFormat::Gray8:
+            return src;
+        case PixelFormat::Bgr8:
+            cv::cvtColor(src, gray, cv::COLOR_BGR2GRAY);
+            break;
+        case PixelFormat::Rgb8:
+            cv::cvtColor(src, gray, cv::COLOR_RGB2GRAY);
+            break;
+        case PixelFormat::Bgra8:
+            cv::cvtColor(src, gray, cv::COLOR_BGRA2GRAY);
+            break;
+        case PixelFormat::Rgba8:
+            cv::cvtColor(src, gray, cv::COLOR_RGBA2GRAY);
+            break;
     }
     return gray;
 }
@@ -72,8 +93,7 @@ ImageView viewOf(const cv::Mat& mat) {
     if (mat.depth() != CV_8U || (mat.channels() != 1 && mat.channels() != 3)) {
         throw Error("viewOf: expected an 8-bit grey or BGR image");
     }
-    return ImageView{mat.data, mat.cols, mat.rows, mat.step[0],
-                     mat.channels() == 1 ? PixelFormat::Gray8 : PixelFormat::Bgr8};
+    return ImageView{mat.data, mat.cols, mat.rows, mat.step[0], mat.channels() == 1 ? PixelFormat::Gray8 : PixelFormat::Bgr8};
 }
 
 namespace {

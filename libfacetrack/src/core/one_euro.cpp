@@ -16,8 +16,7 @@ double alpha(double cutoffHz, double dt) {
 
 }  // namespace
 
-const Eigen::VectorXd& OneEuroFilter::operator()(const Eigen::VectorXd& x, double dt, double scale,
-                                                   double extraCutoffHz) {
+const Eigen::VectorXd& OneEuroFilter::operator()(const Eigen::VectorXd& x, double dt, double scale, double extraCutoffHz) {
     if (value_.size() != x.size() || !value_.allFinite() || !(dt > 0.0)) {
         value_ = x;
         speed_.setZero(x.size());

@@ -12,8 +12,8 @@
 namespace facetrack::core {
 
 struct OneEuroSettings {
-    double min_cutoff_hz = 1.0;   ///< f_min
-    double beta = 1.0;            ///< cutoff added per unit of speed (units of `scale` per second)
+    double min_cutoff_hz = 1.0;         ///< f_min
+    double beta = 1.0;                  ///< cutoff added per unit of speed (units of `scale` per second)
     double derivative_cutoff_hz = 1.0;  ///< f_d
 };
 
@@ -28,8 +28,7 @@ public:
     /// measured elsewhere (the whole face's motion, MotionSpeed). Returns the
     /// filter's own state (valid until the next call); allocates only when the
     /// size changes.
-    const Eigen::VectorXd& operator()(const Eigen::VectorXd& x, double dt, double scale = 1.0,
-                                      double extra_cutoff_hz = 0.0);
+    const Eigen::VectorXd& operator()(const Eigen::VectorXd& x, double dt, double scale = 1.0, double extra_cutoff_hz = 0.0);
 
     void reset() { value_.resize(0); }
 

@@ -41,8 +41,7 @@ std::unique_ptr<FaceDetector> createFaceDetector(const DetectorConfig& config) {
             return detector;
         }
         if (config.kind == DetectorKind::YuNet) {
-            throw Error(std::string("YuNet model not found: set FACETRACK_YUNET_MODEL or put ") + kYuNetFile +
-                        " in " + modelDirectory());
+            throw Error(std::string("YuNet model not found: set FACETRACK_YUNET_MODEL or put ") + kYuNetFile + " in " + modelDirectory());
         }
     }
     const std::string cascade = config.cascade_file.empty() ? kDefaultCascade : config.cascade_file;

@@ -22,13 +22,10 @@ Downscaled downscale(const cv::Mat& frame, int maxWidth) {
     return out;
 }
 
-Box toFrame(float x, float y, float w, float h, float scale) {
-    return {x / scale, y / scale, (x + w) / scale, (y + h) / scale};
-}
+Box toFrame(float x, float y, float w, float h, float scale) { return {x / scale, y / scale, (x + w) / scale, (y + h) / scale}; }
 
 std::vector<Detection> sortAndLimit(std::vector<Detection> detections, int maxFaces) {
-    std::stable_sort(detections.begin(), detections.end(),
-                     [](const Detection& a, const Detection& b) { return a.score > b.score; });
+    std::stable_sort(detections.begin(), detections.end(), [](const Detection& a, const Detection& b) { return a.score > b.score; });
     if (maxFaces >= 0 && detections.size() > static_cast<std::size_t>(maxFaces)) detections.resize(maxFaces);
     return detections;
 }

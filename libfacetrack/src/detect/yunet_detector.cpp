@@ -24,8 +24,7 @@ constexpr float kSecondLookScale = 0.75f;
 constexpr float kSameFaceIou = 0.5f;
 }  // namespace
 
-YuNetDetector::YuNetDetector(const std::string& modelPath, const DetectorConfig& config)
-    : path_(modelPath), config_(config) {
+YuNetDetector::YuNetDetector(const std::string& modelPath, const DetectorConfig& config) : path_(modelPath), config_(config) {
     try {
         net_ = cv::FaceDetectorYN::create(path_, "", cv::Size(320, 320), config_.min_score, kNmsThreshold, kTopK);
     } catch (const cv::Exception& e) {
@@ -54,8 +53,7 @@ std::vector<Detection> YuNetDetector::detect(const ImageView& frame) {
     const Downscaled first = downscale(bgr, config_.detect_width);
     std::vector<Detection> detections = run(first.image, first.scale);
 
-    const bool unsure = std::any_of(detections.begin(), detections.end(),
-                                    [](const Detection& d) { return d.score < kSureScore; });
+    const bool unsure = std::any_of(detections.begin(), detections.end(), [](const Detection& d) { return d.score < kSureScore; });
     if (unsure) {
         const int secondWidth = std::max(kMinDetectSide, static_cast<int>(first.image.cols * kSecondLookScale));
         const Downscaled second = downscale(bgr, secondWidth);

@@ -36,7 +36,8 @@ public:
         }
         if (cascade_->hasLandmarkNet()) {
             landmark_basis_ = landmarkBasis(*face_, layout_.anchors.expressions);
-            landmark_net_.emplace(d.landmark_net, d.patch_size, kLandmarkOutputs, "CNN cascade '" + cascade_->sourcePath() + "' landmark net");
+            landmark_net_.emplace(d.landmark_net, d.patch_size, kLandmarkOutputs,
+                                  "CNN cascade '" + cascade_->sourcePath() + "' landmark net");
         }
     }
 
@@ -47,12 +48,13 @@ public:
             rounds += std::to_string(r);
         }
         return {"cnn", true,
-                std::string(cascade_->expressionsOnly() ? "expressions only (" + std::to_string(reported_.size()) +
-                                (model::dataOf(*cascade_).corrects_fit ? ", the fit's corrected" : " beside the fit's") + "), " : "") +
+                std::string(cascade_->expressionsOnly()
+                                ? "expressions only (" + std::to_string(reported_.size()) +
+                                      (model::dataOf(*cascade_).corrects_fit ? ", the fit's corrected" : " beside the fit's") + "), "
+                                : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
                     std::to_string(layout_.anchors.expressions.size()) + " expressions" + (mirror_ ? ", mirror-averaged" : "") +
-                    (landmark_net_ ? ", landmark net" : "") +
-                    "; nets on the " + nets_.front().engineName() + " (" +
+                    (landmark_net_ ? ", landmark net" : "") + "; nets on the " + nets_.front().engineName() + " (" +
                     cascade_->sourcePath() + ")"};
     }
 
@@ -93,7 +95,8 @@ public:
         if (!s.shaped || s.identity != r.identity) {
             s.identity = r.identity;
             Eigen::VectorXd a = Eigen::VectorXd::Zero(layout_.anchors.identityCount());
-            for (std::size_t k = 0; k < s.identity.size() && k < static_cast<std::size_t>(a.size()); ++k) a[static_cast<Eigen::Index>(k)] = s.identity[k];
+            for (std::size_t k = 0; k < s.identity.size() && k < static_cast<std::size_t>(a.size()); ++k)
+                a[static_cast<Eigen::Index>(k)] = s.identity[k];
             s.work.identity_shape = fit::shapeWithIdentity(layout_.anchors, a);
             if (landmark_net_) s.landmark_identity_shape = fit::shapeWithIdentity(landmark_basis_, a);
             s.shaped = true;
@@ -127,9 +130,10 @@ private:
         projectAnchors(layout_, s.work.identity_shape, frame.camera, s.params, s.work.anchors3d, s.work.anchors);
         if (!s.work.anchors.allFinite()) return;
         warpFace(layout_, frame.gray, s.work.anchors, s.work.patch);
-        const fit::Landmarks2d q = displaced(patchToFrame(layout_, s.work.anchors),
-                                             projectedLandmarks(landmark_basis_, s.landmark_identity_shape, frame.camera, s.params, s.landmark_slots),
-                                             landmark_net_->predict(s.work.patch));
+        const fit::Landmarks2d q = displaced(
+            patchToFrame(layout_, s.work.anchors),
+            projectedLandmarks(landmark_basis_, s.landmark_identity_shape, frame.camera, s.params, s.landmark_slots),
+            landmark_net_->predict(s.work.patch));
         if (!q.allFinite()) return;
         const landmarks::Shape68 moved = q.cast<float>();
         face.result.landmarks = landmarks::toLandmarks68(moved);

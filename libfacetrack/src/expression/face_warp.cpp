@@ -34,7 +34,8 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
     // Frontal projection of the mean face: model (x, y) with y up -> patch (x, -y).
     auto frontal = [&](std::uint32_t v) { return Eigen::Vector2d(data.neutral(0, v), -data.neutral(1, v)); };
     std::vector<cv::Point2f> hullInput;
-    for (const auto v : data.landmark_vertices) hullInput.emplace_back(static_cast<float>(frontal(v).x()), static_cast<float>(frontal(v).y()));
+    for (const auto v : data.landmark_vertices)
+        hullInput.emplace_back(static_cast<float>(frontal(v).x()), static_cast<float>(frontal(v).y()));
     std::vector<cv::Point2f> hull;
     cv::convexHull(hullInput, hull);
     cv::Point2f centre(0, 0);
@@ -50,7 +51,9 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
     std::vector<double> best(chosen.size(), std::numeric_limits<double>::infinity());
     for (std::uint32_t v = 0; v < data.face_vertex_count; ++v) {
         const Eigen::Vector2d p = frontal(v);
-        if (data.neutral(2, v) < minZ || cv::pointPolygonTest(hull, cv::Point2f(static_cast<float>(p.x()), static_cast<float>(p.y())), false) < 0) continue;
+        if (data.neutral(2, v) < minZ ||
+            cv::pointPolygonTest(hull, cv::Point2f(static_cast<float>(p.x()), static_cast<float>(p.y())), false) < 0)
+            continue;
         const double gx = (p.x() - box.x) / box.width * grid, gy = (p.y() - box.y) / box.height * grid;
         const int cx = std::clamp(static_cast<int>(gx), 0, grid - 1), cy = std::clamp(static_cast<int>(gy), 0, grid - 1);
         const double d = std::hypot(gx - (cx + 0.5), gy - (cy + 0.5));
@@ -76,7 +79,8 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
     // Boundary: the grown hull itself (which the anchors only approach), and the patch border.
     for (const auto& p : hull) points.push_back(offset + scale * Eigen::Vector2d(p.x, p.y));
     const double e = size - 0.5, m = (size - 1) / 2.0;
-    for (const auto& [x, y] : std::vector<std::pair<double, double>>{{-0.5, -0.5}, {m, -0.5}, {e, -0.5}, {e, m}, {e, e}, {m, e}, {-0.5, e}, {-0.5, m}})
+    for (const auto& [x, y] :
+         std::vector<std::pair<double, double>>{{-0.5, -0.5}, {m, -0.5}, {e, -0.5}, {e, m}, {e, e}, {m, e}, {-0.5, e}, {-0.5, m}})
         points.emplace_back(x, y);
     layout.canonical.resize(2, static_cast<Eigen::Index>(points.size()));
     for (std::size_t i = 0; i < points.size(); ++i) layout.canonical.col(static_cast<Eigen::Index>(i)) = points[i];
@@ -118,8 +122,8 @@ WarpLayout makeWarpLayout(const model::FaceModelData& data, const std::vector<in
 
 Eigen::Matrix2Xd projectAnchors(const WarpLayout& layout, const Eigen::VectorXd& identity, const core::Camera& camera,
                                 const fit::FaceParams& params) {
-    const Eigen::Matrix3Xd base =
-        fit::shapeWithIdentity(layout.anchors, identity.size() == layout.anchors.identityCount() ? identity : Eigen::VectorXd());
+    const Eigen::Matrix3Xd base = fit::shapeWithIdentity(layout.anchors,
+                                                         identity.size() == layout.anchors.identityCount() ? identity : Eigen::VectorXd());
     Eigen::Matrix3Xd work;
     Eigen::Matrix2Xd out;
     projectAnchors(layout, base, camera, params, work, out);
@@ -161,7 +165,8 @@ void warpFace(const WarpLayout& layout, const cv::Mat& frame, const Eigen::Matri
             const Eigen::Vector2d f = bw[0] * framePoint(tri[0]) + bw[1] * framePoint(tri[1]) + bw[2] * framePoint(tri[2]);
             const double u = f.x(), v = f.y();
             const double cu = std::clamp(u, 0.0, w - 1.0), cv = std::clamp(v, 0.0, h - 1.0);
-            const int x0 = std::min(static_cast<int>(cu), w - 2 < 0 ? 0 : w - 2), y0 = std::min(static_cast<int>(cv), h - 2 < 0 ? 0 : h - 2);
+            const int x0 = std::min(static_cast<int>(cu), w - 2 < 0 ? 0 : w - 2),
+                      y0 = std::min(static_cast<int>(cv), h - 2 < 0 ? 0 : h - 2);
             const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
             const double fx = cu - x0, fy = cv - y0;
             const double top = (1 - fx) * frame.at<std::uint8_t>(y0, x0) + fx * frame.at<std::uint8_t>(y0, x1);

@@ -24,13 +24,13 @@
 namespace facetrack::expression {
 
 struct WarpLayout {
-    int size = 0;                              ///< the patch is size x size pixels
-    fit::PointBasis anchors;                   ///< the anchors' rows, for `expressions`
+    int size = 0;             ///< the patch is size x size pixels
+    fit::PointBasis anchors;  ///< the anchors' rows, for `expressions`
     /// The mean face's mean anchor (frontal frame, cm): the cascade's updates
     /// turn the face about it (update_net.hpp), so that a turn and a shift look different.
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    Eigen::Matrix2Xd canonical;                ///< 2 x (anchors + boundary), patch pixels
-    std::vector<std::array<int, 3>> triangles; ///< over the columns of `canonical`
+    Eigen::Matrix2Xd canonical;                 ///< 2 x (anchors + boundary), patch pixels
+    std::vector<std::array<int, 3>> triangles;  ///< over the columns of `canonical`
     /// Per patch pixel (row-major): its triangle, -1 for none, and its barycentric weights.
     std::vector<int> pixel_triangle;
     std::vector<Eigen::Vector3f> pixel_weights;

@@ -23,11 +23,10 @@ struct FilterFaceState final : pipeline::StageState {
     explicit FilterFaceState(const core::OneEuroSettings& s)
         : landmarks(s), rotation(s), translation(s), expression(s), face_motion(s.derivative_cutoff_hz) {}
     core::OneEuroFilter landmarks, rotation, translation, expression;
-    core::MotionSpeed face_motion;  // of the landmarks' centroid
+    core::MotionSpeed face_motion;                                      // of the landmarks' centroid
     Eigen::Quaterniond last_rotation = Eigen::Quaterniond::Identity();  // keeps q and -q apart
     // The filters' inputs, sized once.
-    Eigen::VectorXd landmark_sample, rotation_sample = Eigen::VectorXd(4), translation_sample = Eigen::VectorXd(3),
-                                     expression_sample;
+    Eigen::VectorXd landmark_sample, rotation_sample = Eigen::VectorXd(4), translation_sample = Eigen::VectorXd(3), expression_sample;
 };
 
 class FilterStage final : public pipeline::Stage {
@@ -104,7 +103,8 @@ private:
         const Eigen::VectorXd& smooth = s.expression(s.expression_sample, dt, 1.0);
         for (std::size_t k = 0; k < e.native.size(); ++k) e.native[k] = static_cast<float>(std::clamp(smooth[k], 0.0, 1.0));
         for (const int k : pass_through_) {
-            if (static_cast<std::size_t>(k) < e.native.size()) e.native[static_cast<std::size_t>(k)] = static_cast<float>(s.expression_sample[k]);
+            if (static_cast<std::size_t>(k) < e.native.size())
+                e.native[static_cast<std::size_t>(k)] = static_cast<float>(s.expression_sample[k]);
         }
         e.arkit = model_->toArkit(e.native);
     }

@@ -38,8 +38,8 @@ public:
         const core::Camera* camera = nullptr;
         const double* observed = nullptr;  ///< 2 x N, column-major (u, v) pixels
         const double* scale = nullptr;
-        double huber = 0.05;               ///< delta, in units of s
-        const double* weights = nullptr;   ///< per point, a factor on its residual (the square root of its weight); null: all 1
+        double huber = 0.05;              ///< delta, in units of s
+        const double* weights = nullptr;  ///< per point, a factor on its residual (the square root of its weight); null: all 1
     };
     PointsCost(const Inputs& inputs, std::vector<int> slots, bool withIdentity);
 

@@ -131,22 +131,20 @@ ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, 
     return chosen;
 }
 
-Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
-                             const FaceParams& params, const ContourSlots& contour) {
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera, const FaceParams& params,
+                             const ContourSlots& contour) {
     Eigen::Matrix3Xd x;
     slotPositions(basis, base, params.expression, x);
     return projectSlots(basis, x, camera, params.pose, contour);
 }
 
-ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
-                               const FaceParams& params) {
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera, const FaceParams& params) {
     Eigen::Matrix3Xd x;
     slotPositions(basis, base, params.expression, x);
     return silhouetteContourAt(basis, x, camera, params.pose);
 }
 
-FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings& settings)
-    : basis_(std::move(basis)), settings_(settings) {
+FaceFitter::FaceFitter(std::shared_ptr<const FitBasis> basis, const FitSettings& settings) : basis_(std::move(basis)), settings_(settings) {
     if (!basis_) throw Error("FaceFitter: no fit basis");
     const int expressions = basis_->expressionCount();
     base_ = basis_->neutral;
@@ -269,8 +267,8 @@ FaceParams FaceFitter::initialParams(const Landmarks2d& observed) const {
     centre3 /= n;
     p.pose.head<3>() = Eigen::Vector3d(0, 0, std::atan2(eyeLine.y(), eyeLine.x()));
     const Eigen::Vector3d rotatedCentre = rotationOf(p.omega()) * centre3;
-    p.pose.tail<3>() = Eigen::Vector3d((centre2.x() - camera_.cx) * depth / camera_.fx,
-                                       (centre2.y() - camera_.cy) * depth / camera_.fy, depth) -
+    p.pose.tail<3>() = Eigen::Vector3d((centre2.x() - camera_.cx) * depth / camera_.fx, (centre2.y() - camera_.cy) * depth / camera_.fy,
+                                       depth) -
                        Eigen::Vector3d(rotatedCentre.x(), rotatedCentre.y(), 0.0);
     return p;
 }
@@ -331,8 +329,7 @@ FitReport FaceFitter::fit(const core::Camera& camera, const Landmarks2d& observe
     return report;
 }
 
-Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<CalibrationFrame>& frames,
-                                  const FitSettings& settings) {
+Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<CalibrationFrame>& frames, const FitSettings& settings) {
     const int expressions = basis.expressionCount();
     Eigen::VectorXd identity = Eigen::VectorXd::Zero(basis.identityCount());
     if (frames.empty()) return identity;
@@ -340,16 +337,16 @@ Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<Calibration
     ceres::Problem problem;
     std::vector<double> scales(frames.size());
     std::vector<std::array<double, model::kLandmarkCount>> weights(frames.size());
-    problem.AddResidualBlock(new ShrinkToZero(basis.identityCount(), settings.identity_prior * static_cast<double>(frames.size())),
-                             nullptr, identity.data());
+    problem.AddResidualBlock(new ShrinkToZero(basis.identityCount(), settings.identity_prior * static_cast<double>(frames.size())), nullptr,
+                             identity.data());
     for (std::size_t f = 0; f < frames.size(); ++f) {
         auto& frame = frames[f];
         if (frame.params.expression.size() != expressions) frame.params.expression = Eigen::VectorXd::Zero(expressions);
         scales[f] = faceScale(frame.observed);
         setPointFactors(settings, eulerDegrees(frame.params.omega()).y(), weights[f]);
-        auto* cost = new PointsCost({&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber,
-                                     weights[f].data()},
-                                    landmarkSlots(basis), true);
+        auto* cost = new PointsCost(
+            {&basis, &basis.neutral, &frame.camera, frame.observed.data(), &scales[f], settings.huber, weights[f].data()},
+            landmarkSlots(basis), true);
         for (int i = 0; i < kJaw; ++i) cost->setSlot(i, frame.contour[i]);
         problem.AddResidualBlock(cost, nullptr, frame.params.pose.data(), frame.params.expression.data(), identity.data());
         problem.AddResidualBlock(new ShrinkToZero(basis.expressionPriorWeights(settings.expression_l2)), nullptr,

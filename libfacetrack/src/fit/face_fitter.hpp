@@ -29,12 +29,12 @@ using Landmarks2d = Eigen::Matrix<double, 2, model::kLandmarkCount>;
 using ContourSlots = std::array<int, model::kContourLandmarkCount>;
 
 struct FitSettings {
-    double huber = 0.05;                ///< robust loss scale, in face sizes (faceScale)
-    double expression_l2 = 1e-3;        ///< w_l2 (TrackerConfig::expression_prior scales it)
-    double expression_temporal = 5e-3;  ///< w_t
-    double rotation_temporal = 1e-3;    ///< per rad^2
-    double translation_temporal = 1e-5; ///< per cm^2
-    double identity_prior = 2e-4;             ///< w_id |a|^2 during identity calibration
+    double huber = 0.05;                 ///< robust loss scale, in face sizes (faceScale)
+    double expression_l2 = 1e-3;         ///< w_l2 (TrackerConfig::expression_prior scales it)
+    double expression_temporal = 5e-3;   ///< w_t
+    double rotation_temporal = 1e-3;     ///< per rad^2
+    double translation_temporal = 1e-5;  ///< per cm^2
+    double identity_prior = 2e-4;        ///< w_id |a|^2 during identity calibration
     int cold_iterations = 40;
     int warm_iterations = 5;
     /// The jaw's side points weigh 1 up to |yaw| jaw_turn_from_deg, jaw_turned_weight from
@@ -107,10 +107,9 @@ ContourSlots nearestContourAt(const FitBasis& basis, const Eigen::Matrix3Xd& x, 
 
 /// The same three for a base shape and fitted parameters (they compute the slot
 /// positions, allocating: for tests and tools, not per frame).
-Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
-                             const FaceParams& params, const ContourSlots& contour);
-ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera,
-                               const FaceParams& params);
+Landmarks2d projectLandmarks(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera, const FaceParams& params,
+                             const ContourSlots& contour);
+ContourSlots silhouetteContour(const FitBasis& basis, const Eigen::Matrix3Xd& base, const core::Camera& camera, const FaceParams& params);
 
 /// Fits one face frame by frame. Holds a Ceres problem (for cold fits) built
 /// once and re-solved, and the warm fit's buffers, sized once. Not copyable:
@@ -160,7 +159,7 @@ private:
     Pose6 previous_pose_;
     Eigen::VectorXd previous_expression_;
     Eigen::VectorXd expression_weights_;  // w_l2 per expression (FitBasis::expressionPriorWeights)
-    Eigen::Matrix3Xd slots_;  // slot positions at current_.expression
+    Eigen::Matrix3Xd slots_;              // slot positions at current_.expression
 
     std::unique_ptr<ceres::Problem> problem_;
     PointsCost* landmarks_ = nullptr;
@@ -185,7 +184,6 @@ struct CalibrationFrame {
 /// and expression (w_id |a|^2 keeps it near the mean; the contour stays as
 /// given). Frames should show varied poses: depth and identity trade off in a
 /// single view.
-Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<CalibrationFrame>& frames,
-                                  const FitSettings& settings);
+Eigen::VectorXd calibrateIdentity(const FitBasis& basis, std::vector<CalibrationFrame>& frames, const FitSettings& settings);
 
 }  // namespace facetrack::fit

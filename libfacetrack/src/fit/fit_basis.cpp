@@ -108,8 +108,7 @@ std::vector<double> distinctMotion(const model::FaceModelData& data, const std::
     return {d.data(), d.data() + d.size()};
 }
 
-PointBasis buildPointBasis(const model::FaceModelData& data, const std::vector<SurfacePoint>& points,
-                           const std::vector<int>& expressions) {
+PointBasis buildPointBasis(const model::FaceModelData& data, const std::vector<SurfacePoint>& points, const std::vector<int>& expressions) {
     PointBasis b;
     b.native_expression_count = static_cast<int>(data.expressions.size());
     b.expressions = expressions;
@@ -130,8 +129,8 @@ PointBasis buildPointBasis(const model::FaceModelData& data, const std::vector<S
                 const auto& shape = data.expressions[static_cast<std::size_t>(expressions[k])];
                 const auto it = std::lower_bound(shape.vertices.begin(), shape.vertices.end(), v);
                 if (it == shape.vertices.end() || *it != v) continue;
-                b.expression.block<3, 1>(3 * s, static_cast<Eigen::Index>(k)) +=
-                    w * (r0 * shape.deltas.col(it - shape.vertices.begin()).cast<double>());
+                b.expression.block<3, 1>(
+                    3 * s, static_cast<Eigen::Index>(k)) += w * (r0 * shape.deltas.col(it - shape.vertices.begin()).cast<double>());
             }
         }
     }
@@ -199,7 +198,6 @@ void applyConvention(FitBasis& basis, const model::LandmarkConvention& c, const 
         if (it != c.expression_prior.end()) basis.expression_prior[static_cast<Eigen::Index>(k)] = it->second;
     }
 }
-
 
 std::shared_ptr<const FitBasis> basisOf(const std::shared_ptr<const FaceModel>& face) {
     if (!face) throw Error("fit: no face model given");

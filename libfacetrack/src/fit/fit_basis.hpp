@@ -60,8 +60,7 @@ struct PointBasis {
 };
 
 /// The basis of `points` (slot s = points[s]) for the expressions `expressions`.
-PointBasis buildPointBasis(const model::FaceModelData& data, const std::vector<SurfacePoint>& points,
-                           const std::vector<int>& expressions);
+PointBasis buildPointBasis(const model::FaceModelData& data, const std::vector<SurfacePoint>& points, const std::vector<int>& expressions);
 
 /// The expressions that the image motion of `points` can tell apart from the
 /// pose and from each other (the rule in fit_basis.cpp), eyeLook* excluded

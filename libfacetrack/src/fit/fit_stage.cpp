@@ -50,8 +50,8 @@ public:
 
     StageInfo info() const override {
         return {"fit", true,
-                "Ceres: pose, " + std::to_string(basis_->expressionCount()) + " expressions, " +
-                    std::to_string(basis_->identityCount()) + " identity modes" +
+                "Ceres: pose, " + std::to_string(basis_->expressionCount()) + " expressions, " + std::to_string(basis_->identityCount()) +
+                    " identity modes" +
                     (settings_.calibration_frames > 0 ? ", identity from " + std::to_string(settings_.calibration_frames) + " frames"
                                                       : ", mean identity")};
     }
@@ -80,8 +80,8 @@ public:
         s.fitted = true;
         const Eigen::Vector3d euler = eulerDegrees(s.params.omega());
         const double depth = s.params.translation().z();
-        if (!(report.residual <= settings_.max_residual) || std::abs(euler.x()) > kMaxPitchDeg ||
-            std::abs(euler.y()) > kMaxYawDeg || !(depth >= kMinDepthCm && depth <= kMaxDepthCm)) {
+        if (!(report.residual <= settings_.max_residual) || std::abs(euler.x()) > kMaxPitchDeg || std::abs(euler.y()) > kMaxYawDeg ||
+            !(depth >= kMinDepthCm && depth <= kMaxDepthCm)) {
             return Outcome::Lost;
         }
         const double turnDeg = Eigen::AngleAxisd(rotationOf(s.params.omega()) * before.transpose()).angle() / core::kRadiansPerDegree;

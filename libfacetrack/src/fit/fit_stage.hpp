@@ -22,9 +22,9 @@
 namespace facetrack::fit {
 
 struct FitStageSettings {
-    float max_residual = 0.12f;  ///< TrackerConfig::max_fit_residual
-    int calibration_frames = 30; ///< TrackerConfig::calibration_frames
-    float expression_prior = 1.f; ///< TrackerConfig::expression_prior: a factor on FitSettings::expression_l2
+    float max_residual = 0.12f;    ///< TrackerConfig::max_fit_residual
+    int calibration_frames = 30;   ///< TrackerConfig::calibration_frames
+    float expression_prior = 1.f;  ///< TrackerConfig::expression_prior: a factor on FitSettings::expression_l2
 };
 
 std::unique_ptr<pipeline::Stage> makeFitStage(std::shared_ptr<const FaceModel> model, const FitStageSettings& settings);

@@ -34,8 +34,7 @@ Eigen::Vector3d eulerDegrees(const Eigen::Vector3d& omega) {
 
 Eigen::Vector3d omegaFromEuler(const Eigen::Vector3d& eulerDeg) {
     const Eigen::Vector3d e = eulerDeg * kDeg;
-    const Eigen::Matrix3d r = (Eigen::AngleAxisd(e.z(), Eigen::Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(e.x(), Eigen::Vector3d::UnitX()) *
+    const Eigen::Matrix3d r = (Eigen::AngleAxisd(e.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(e.x(), Eigen::Vector3d::UnitX()) *
                                Eigen::AngleAxisd(-e.y(), Eigen::Vector3d::UnitY()))
                                   .toRotationMatrix();
     const Eigen::AngleAxisd aa(r);
@@ -47,8 +46,7 @@ HeadPose headPoseOf(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& t
     const Eigen::AngleAxisd fromFrontal(q.toRotationMatrix() * modelToFrontal().transpose());
     const Eigen::Vector3d euler = eulerDegrees(fromFrontal.angle() * fromFrontal.axis());
     HeadPose pose;
-    pose.rotation = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
-                     static_cast<float>(q.z())};
+    pose.rotation = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())};
     pose.euler_deg = {static_cast<float>(euler.x()), static_cast<float>(euler.y()), static_cast<float>(euler.z())};
     pose.translation_mm = {static_cast<float>(translationMm.x()), static_cast<float>(translationMm.y()),
                            static_cast<float>(translationMm.z())};

@@ -13,7 +13,7 @@ namespace facetrack::fit {
 /// omega an angle-axis vector, t in cm; plus the fitted expression weights b.
 struct FaceParams {
     Eigen::Matrix<double, 6, 1> pose = Eigen::Matrix<double, 6, 1>::Zero();  ///< (omega, t)
-    Eigen::VectorXd expression;                                             ///< FitBasis order, in [0, 1]
+    Eigen::VectorXd expression;                                              ///< FitBasis order, in [0, 1]
 
     auto omega() const { return pose.head<3>(); }
     auto translation() const { return pose.tail<3>(); }

@@ -37,7 +37,8 @@ void validate(const EyeModelData& m, const std::string& what) {
     m.pixels.validate(what.c_str());
     m.aperture.validate(what.c_str());
     if (m.pixels.outputs != kPixelClasses || m.aperture.outputs != 1) throw Error(what + ": corrupt: forest outputs");
-    if (m.pixels.reach() > kPixelTestReach) throw Error(what + ": corrupt: pixel tests reach beyond " + std::to_string(kPixelTestReach) + " px");
+    if (m.pixels.reach() > kPixelTestReach)
+        throw Error(what + ": corrupt: pixel tests reach beyond " + std::to_string(kPixelTestReach) + " px");
     if (!(m.open_aperture > 0.f && m.open_aperture < 2.f && m.closed_aperture >= 0.f && m.closed_aperture < m.open_aperture))
         throw Error(what + ": corrupt: open or closed aperture");
     if (m.corner_stages.size() > kMaxCornerStages) throw Error(what + ": corrupt: corner stages");
@@ -118,7 +119,8 @@ std::array<Point2, 2> eyeCorners(const EyeModelData& model, const cv::Mat& gray,
 float openMapGap(const cv::Mat& open) {
     float gap = 0.f;
     for (const float share : {0.35f, 0.5f, 0.65f}) {
-        const float x = (kOuterX + share * kEyeWidth - static_cast<float>(kClassifiedRegion.x0)) / static_cast<float>(kClassifiedRegion.step);
+        const float x = (kOuterX + share * kEyeWidth - static_cast<float>(kClassifiedRegion.x0)) /
+                        static_cast<float>(kClassifiedRegion.step);
         const int column = std::clamp(static_cast<int>(std::lround(x)), 0, kClassifiedRegion.columns() - 1);
         for (int row = 0; row < kClassifiedRegion.rows(); ++row) gap += open.at<float>(row, column);
     }
@@ -180,9 +182,7 @@ EyeModel::EyeModel(std::shared_ptr<const gaze::EyeModelData> data, std::string s
     if (!data_) throw Error("EyeModel: null model data");
 }
 
-std::shared_ptr<const EyeModel> EyeModel::load(const std::string& path) {
-    return model::Internals::make(gaze::readEyeModel(path), path);
-}
+std::shared_ptr<const EyeModel> EyeModel::load(const std::string& path) { return model::Internals::make(gaze::readEyeModel(path), path); }
 
 std::shared_ptr<const EyeModel> EyeModel::loadDefault() { return load(defaultPath()); }
 

@@ -33,8 +33,8 @@ static_assert(kClassifiedRegion.step == 2 && kClassifiedRegion.x0 % 2 == 0 && kC
               "the classified region's cells must be cells of the iris net's grid");
 
 struct EyeModelData {
-    PatchForest pixels;     ///< anchor: the pixel; outputs P(skin), P(sclera), P(iris)
-    PatchForest aperture;   ///< anchor: the patch origin; output: lid aperture / eye width
+    PatchForest pixels;    ///< anchor: the pixel; outputs P(skin), P(sclera), P(iris)
+    PatchForest aperture;  ///< anchor: the patch origin; output: lid aperture / eye width
     /// What the aperture forest says, on eyes it was not trained on, for open
     /// eyes (the median; openness 1 until a face's own open-eye value is known)
     /// and for closed ones (teacher aperture under 0.1: openness 0). A

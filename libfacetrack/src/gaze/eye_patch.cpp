@@ -53,8 +53,8 @@ int outerCorner(Eye eye) { return eye == Eye::Left ? 45 : 36; }
 int innerCorner(Eye eye) { return eye == Eye::Left ? 42 : 39; }
 
 bool cutEyePatch(const cv::Mat& gray, const Landmarks68& landmarks, Eye eye, EyePatch& out) {
-    return cutEyePatch(gray, landmarks[static_cast<std::size_t>(outerCorner(eye))],
-                       landmarks[static_cast<std::size_t>(innerCorner(eye))], eye == Eye::Left, out);
+    return cutEyePatch(gray, landmarks[static_cast<std::size_t>(outerCorner(eye))], landmarks[static_cast<std::size_t>(innerCorner(eye))],
+                       eye == Eye::Left, out);
 }
 
 bool cutEyePatch(const cv::Mat& gray, Point2 outer, Point2 inner, bool mirror, EyePatch& out) {

@@ -30,8 +30,8 @@ int outerCorner(Eye eye);
 int innerCorner(Eye eye);
 
 struct EyePatch {
-    cv::Mat pixels;                  ///< kPatchHeight x kPatchWidth, CV_32F, normalised
-    cv::Matx23f image_from_patch;    ///< patch pixel -> frame pixel
+    cv::Mat pixels;                ///< kPatchHeight x kPatchWidth, CV_32F, normalised
+    cv::Matx23f image_from_patch;  ///< patch pixel -> frame pixel
     cv::Matx23f patch_from_image;
     float image_px_per_patch_px = 1.f;
     bool mirrored = false;

@@ -135,7 +135,11 @@ PatchForest trainPatchForest(const std::vector<cv::Mat>& patches, const std::vec
     std::atomic<int> next{0}, done{0};
     const auto work = [&] {
         for (int t = next++; t < options.trees; t = next++) {
-            TreeBuilder b{patches, samples, targets, outputs, options,
+            TreeBuilder b{patches,
+                          samples,
+                          targets,
+                          outputs,
+                          options,
                           forest.splits.data() + static_cast<std::size_t>(t) * forest.splitsPerTree(),
                           forest.leaves.data() + static_cast<std::size_t>(t) * forest.leavesPerTree() * outputs,
                           std::mt19937(options.seed * 7919u + static_cast<unsigned>(t))};

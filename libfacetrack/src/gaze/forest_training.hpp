@@ -21,11 +21,11 @@ struct PatchSample {
 struct ForestTrainingOptions {
     int trees = 8;
     int depth = 10;
-    int candidates = 100;          ///< tests tried per node
-    int thresholds = 6;            ///< thresholds tried per test
-    int min_leaf = 8;              ///< a node with fewer samples is not split
-    int samples_per_tree = 150000; ///< bootstrap size
-    int search_samples = 4000;     ///< samples a node's split search looks at (a random subset)
+    int candidates = 100;           ///< tests tried per node
+    int thresholds = 6;             ///< thresholds tried per test
+    int min_leaf = 8;               ///< a node with fewer samples is not split
+    int samples_per_tree = 150000;  ///< bootstrap size
+    int search_samples = 4000;      ///< samples a node's split search looks at (a random subset)
     int threads = 2;
     unsigned seed = 1;
     /// Draws a random test (its threshold is chosen by the trainer).

@@ -99,7 +99,8 @@ private:
 
 /// The disc of `eye` at `angles`, with its derivatives. False when the iris
 /// is behind the camera or degenerate.
-bool discAt(const EyeObservation& eye, const Eigen::Matrix3f& R, const core::Camera& camera, const Eigen::Vector2f& angles, SoftDisc& disc) {
+bool discAt(const EyeObservation& eye, const Eigen::Matrix3f& R, const core::Camera& camera, const Eigen::Vector2f& angles,
+            SoftDisc& disc) {
     constexpr float h = 0.25f * kDeg;
     ProjectedIris iris;
     std::array<ProjectedIris, 2> moved;
@@ -367,8 +368,8 @@ GazeAngles fitGaze(const std::array<EyeObservation, 2>& eyes, const Eigen::Matri
             SoftDisc disc;
             const bool seen = mapScale[e] > 0.f && discAt(eyes[e], R, camera, a[e], disc);
             const int row = e * kEyeResiduals;
-            eyeResiduals(eyes[e], pixels[e], seen ? &disc : nullptr, mapScale[e], pixelScale[e], r.data() + row,
-                         J.col(2 * e).data() + row, J.col(2 * e + 1).data() + row);
+            eyeResiduals(eyes[e], pixels[e], seen ? &disc : nullptr, mapScale[e], pixelScale[e], r.data() + row, J.col(2 * e).data() + row,
+                         J.col(2 * e + 1).data() + row);
         }
         priorResiduals(a, previous, havePrevious, s, r.data() + 2 * kEyeResiduals);
         // J^T J and J^T r by blocks: an eye's rows have only its own two columns.

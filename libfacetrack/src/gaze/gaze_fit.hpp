@@ -65,11 +65,11 @@ struct EyeObservation {
 };
 
 struct GazeFitSettings {
-    float data_sigma = 0.3f;           ///< per-pixel probability noise
-    float pixel_sigma = 1.f;           ///< per-pixel intensity noise (normalised patch); 0: no appearance term
-    float temporal_sigma_deg = 8.f;    ///< per frame
-    float pitch_sigma_deg = 2.f;       ///< the two eyes' pitch difference
-    float vergence_deg = 3.f;          ///< theta_R - theta_L for a typical screen distance
+    float data_sigma = 0.3f;         ///< per-pixel probability noise
+    float pixel_sigma = 1.f;         ///< per-pixel intensity noise (normalised patch); 0: no appearance term
+    float temporal_sigma_deg = 8.f;  ///< per frame
+    float pitch_sigma_deg = 2.f;     ///< the two eyes' pitch difference
+    float vergence_deg = 3.f;        ///< theta_R - theta_L for a typical screen distance
     float vergence_sigma_deg = 4.f;
     float ahead_sigma_deg = 40.f;
     /// Gauss-Newton steps at most; the fit stops earlier once no angle moves by
@@ -90,8 +90,8 @@ struct ProjectedIris {
 bool projectIris(const EyeObservation& eye, const Eigen::Matrix3f& cameraFromHead, const core::Camera& camera,
                  const Eigen::Vector2f& angles, ProjectedIris& out);
 /// The iris centre at (yaw, pitch) in frame pixels.
-Eigen::Vector2f irisCentreInImage(const Eigen::Vector3f& centre, const Eigen::Matrix3f& cameraFromHead,
-                                  const core::Camera& camera, const Eigen::Vector2f& angles);
+Eigen::Vector2f irisCentreInImage(const Eigen::Vector3f& centre, const Eigen::Matrix3f& cameraFromHead, const core::Camera& camera,
+                                  const Eigen::Vector2f& angles);
 
 /// The MAP estimate, from `previous` (used by the temporal prior when
 /// `havePrevious`, and as the start for an eye without a usable centroid).

@@ -63,7 +63,7 @@ const core::OneEuroSettings kGazeSmoothing{0.8, 0.05, 5.0};
 const core::OneEuroSettings kEyeballSmoothing{1.0, 1.0, 1.0};
 
 struct GazeFaceState final : pipeline::StageState {
-    std::array<EyeState, 2> eyes;  // the subject's left, right
+    std::array<EyeState, 2> eyes;                                         // the subject's left, right
     GazeAngles angles{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};  // the MAP estimate
     bool have_angles = false;
     core::OneEuroFilter smoothing{kGazeSmoothing};
@@ -72,7 +72,7 @@ struct GazeFaceState final : pipeline::StageState {
     Eigen::VectorXd eyeball_sample = Eigen::VectorXd::Zero(6);
     std::vector<float> centres_identity;  // the identity the eyeball centres were computed for
     bool have_centres = false;
-    std::array<Vec3, 2> centres;          // eyeball rotation centres on the identity's mesh (model frame)
+    std::array<Vec3, 2> centres;                 // eyeball rotation centres on the identity's mesh (model frame)
     std::array<std::array<Vec3, 2>, 2> corners;  // that mesh's outer and inner eye corners (FaceModel::landmarkPoints)
     std::array<Eigen::Vector3f, 2> offset{Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};  // landmark correction, model frame
     bool have_offset = false;
@@ -95,8 +95,8 @@ std::array<EyeShapes, 2> eyeShapes(const FaceModel& face) {
     std::array<EyeShapes, 2> shapes;
     for (int e = 0; e < 2; ++e) {
         const std::string s = e == 0 ? "_L" : "_R";
-        shapes[e] = {index("eyeBlink" + s), index("eyeLookUp" + s), index("eyeLookDown" + s),
-                     index("eyeLookIn" + s),  index("eyeLookOut" + s), index("eyeWide" + s)};
+        shapes[e] = {index("eyeBlink" + s),  index("eyeLookUp" + s),  index("eyeLookDown" + s),
+                     index("eyeLookIn" + s), index("eyeLookOut" + s), index("eyeWide" + s)};
     }
     return shapes;
 }
@@ -135,19 +135,15 @@ EyeReading readEye(const EyeModelData& model, const LidsFollowingGaze& lids, flo
 class GazeStage final : public pipeline::Stage {
 public:
     GazeStage(std::shared_ptr<const EyeModel> eyes, std::shared_ptr<const FaceModel> face)
-        : eyes_(std::move(eyes)),
-          face_(std::move(face)),
-          rigs_(EyeRig::both(*face_)),
-          shapes_(eyeShapes(*face_)),
-          lids_(*face_) {
-        if (!model::dataOf(*eyes_).iris_net.empty()) iris_net_.emplace(model::dataOf(*eyes_).iris_net, "eye model '" + eyes_->sourcePath() + "': its iris net");
+        : eyes_(std::move(eyes)), face_(std::move(face)), rigs_(EyeRig::both(*face_)), shapes_(eyeShapes(*face_)), lids_(*face_) {
+        if (!model::dataOf(*eyes_).iris_net.empty())
+            iris_net_.emplace(model::dataOf(*eyes_).iris_net, "eye model '" + eyes_->sourcePath() + "': its iris net");
     }
 
     StageInfo info() const override {
         return {"gaze", true,
                 std::string("eye patches, ") + (iris_net_ ? std::string("iris CNN on the ") + iris_net_->engineName() : "pixel forest") +
-                    ", aperture forest, binocular MAP fit (" +
-                    eyes_->sourcePath() + ")"};
+                    ", aperture forest, binocular MAP fit (" + eyes_->sourcePath() + ")"};
     }
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override {
@@ -218,7 +214,8 @@ public:
             seen[e].patch = &eye.patch;
             seen[e].iris = &eye.iris;
             seen[e].open = &eye.open;
-            const EyeReading reading = readEye(model, lids_, forestAperture[e], aperture[e], eye.reference, s.angles[static_cast<std::size_t>(e)].y());
+            const EyeReading reading = readEye(model, lids_, forestAperture[e], aperture[e], eye.reference,
+                                               s.angles[static_cast<std::size_t>(e)].y());
             ratio[e] = reading.ratio;
             seen[e].weight = reading.weight;
         }
@@ -384,12 +381,12 @@ private:
 
 }  // namespace
 
-
 LidsFollowingGaze::LidsFollowingGaze(const FaceModel& face) {
     const std::array<EyeShapes, 2> shapes = eyeShapes(face);
     const std::array<int, 2> down = {shapes[0].lookDown, shapes[1].lookDown};
     if (down[0] < 0 || down[1] < 0) {
-        for (int k = 0; k < kSamples; ++k) share_[static_cast<std::size_t>(k)] = std::max(0.55f, 1.f - 0.012f * 5.f * static_cast<float>(k));
+        for (int k = 0; k < kSamples; ++k)
+            share_[static_cast<std::size_t>(k)] = std::max(0.55f, 1.f - 0.012f * 5.f * static_cast<float>(k));
         return;
     }
     // Per eye (68-point numbering): corners, then upper and lower lid points facing each other.

@@ -23,8 +23,7 @@ public:
     /// normalised): P(iris) and P(open) = P(sclera) + P(iris) on
     /// kClassifiedRegion's cells, into `iris[e]` and `open[e]` (CV_32F,
     /// rows() x columns(), allocated by the caller). Not thread-safe.
-    void classify(const std::array<const cv::Mat*, 2>& patches, const std::array<cv::Mat*, 2>& iris,
-                  const std::array<cv::Mat*, 2>& open);
+    void classify(const std::array<const cv::Mat*, 2>& patches, const std::array<cv::Mat*, 2>& iris, const std::array<cv::Mat*, 2>& open);
 
     /// What runs the net (nn::OnnxNet::engineName).
     const char* engineName() const { return net_.engineName(); }

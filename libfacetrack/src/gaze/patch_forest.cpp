@@ -16,10 +16,14 @@ namespace {
 template <class Read>
 inline float valueOf(const PatchFeature& f, int x, int y, const Read& read) {
     switch (f.kind) {
-        case PatchFeature::Difference: return read(f.ax, f.ay) - read(f.bx, f.by);
-        case PatchFeature::Intensity: return read(f.ax, f.ay);
-        case PatchFeature::Column: return static_cast<float>(x);
-        case PatchFeature::Row: return static_cast<float>(y);
+        case PatchFeature::Difference:
+            return read(f.ax, f.ay) - read(f.bx, f.by);
+        case PatchFeature::Intensity:
+            return read(f.ax, f.ay);
+        case PatchFeature::Column:
+            return static_cast<float>(x);
+        case PatchFeature::Row:
+            return static_cast<float>(y);
     }
     return 0.f;
 }
@@ -36,8 +40,8 @@ void evaluateWith(const PatchForest& forest, int x, int y, const Read& read, flo
             const PatchFeature& f = tree[node];
             node = 2 * node + (valueOf(f, x, y, read) >= f.threshold ? 2 : 1);
         }
-        const float* values =
-            forest.leaves.data() + (static_cast<std::size_t>(t) * forest.leavesPerTree() + (node - perTree)) * forest.outputs;
+        const float* values = forest.leaves.data() +
+                              (static_cast<std::size_t>(t) * forest.leavesPerTree() + (node - perTree)) * forest.outputs;
         for (int k = 0; k < forest.outputs; ++k) out[k] += values[k];
     }
     if (trees > 0) {
@@ -63,7 +67,8 @@ void PatchForest::evaluate(const cv::Mat& patch, int x, int y, float* out) const
 void PatchForest::evaluatePadded(const cv::Mat& padded, int margin, int x, int y, float* out) const {
     const float* anchor = padded.ptr<float>(y + margin) + x + margin;
     const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(padded.step1());
-    evaluateWith(*this, x, y, [anchor, stride](int dx, int dy) { return anchor[dy * stride + dx]; }, out);
+    evaluateWith(
+        *this, x, y, [anchor, stride](int dx, int dy) { return anchor[dy * stride + dx]; }, out);
 }
 
 int PatchForest::reach() const {

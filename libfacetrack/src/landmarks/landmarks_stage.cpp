@@ -14,7 +14,7 @@ namespace {
 // Beyond these the face is lost.
 constexpr float kMaxOutsideShare = 0.25f;  // landmarks outside the frame
 constexpr float kMinEyeCornersPx = 8.f;
-constexpr double kMinFaceContrast = 4.0;   // grey-level standard deviation inside the landmarks' box
+constexpr double kMinFaceContrast = 4.0;  // grey-level standard deviation inside the landmarks' box
 
 /// A face has texture: on a covered lens or a blanked frame the regression
 /// still returns a plausible shape.

@@ -82,9 +82,15 @@ Shape68 alignLandmarks(const LbfModel& model, const cv::Mat& gray, Shape68 shape
 
 Shape68 alignFromStarts(const LbfModel& model, const cv::Mat& gray, const Shape68& start, int starts) {
     static constexpr float kDiagonal = 0.70710678f;
-    static constexpr std::array<std::array<float, 2>, kMaxLandmarkStarts> kDirections = {{
-        {0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1},
-        {kDiagonal, kDiagonal}, {-kDiagonal, -kDiagonal}, {kDiagonal, -kDiagonal}, {-kDiagonal, kDiagonal}}};
+    static constexpr std::array<std::array<float, 2>, kMaxLandmarkStarts> kDirections = {{{0, 0},
+                                                                                          {1, 0},
+                                                                                          {-1, 0},
+                                                                                          {0, 1},
+                                                                                          {0, -1},
+                                                                                          {kDiagonal, kDiagonal},
+                                                                                          {-kDiagonal, -kDiagonal},
+                                                                                          {kDiagonal, -kDiagonal},
+                                                                                          {-kDiagonal, kDiagonal}}};
     starts = std::clamp(starts, 1, kMaxLandmarkStarts);
     const float shift = kStartShift * (start.col(36) - start.col(45)).norm();
     std::array<Shape68, kMaxLandmarkStarts> shapes;

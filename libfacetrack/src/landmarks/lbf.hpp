@@ -33,8 +33,7 @@ inline int pixelAt(const cv::Mat& gray, const Eigen::Vector2f& p) {
 
 /// Calls onLeaf(tree, regressionRow) for the leaf each tree of the stage reaches.
 template <class OnLeaf>
-void traverseStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gray, const Anchors& anchors,
-                   OnLeaf&& onLeaf) {
+void traverseStage(const LbfModel& model, const LbfStage& stage, const cv::Mat& gray, const Anchors& anchors, OnLeaf&& onLeaf) {
     const int splitsPerTree = model.splitsPerTree();
     const int trees = model.treesPerStage();
     for (int t = 0; t < trees; ++t) {

@@ -72,8 +72,7 @@ std::vector<Triangle> triangulateAnchors(const Anchors& anchors) {
 }
 
 /// Barycentric (w0, w1, w2) of p in triangle abc.
-Eigen::Vector3f barycentric(const Eigen::Vector2f& p, const Eigen::Vector2f& a, const Eigen::Vector2f& b,
-                            const Eigen::Vector2f& c) {
+Eigen::Vector3f barycentric(const Eigen::Vector2f& p, const Eigen::Vector2f& a, const Eigen::Vector2f& b, const Eigen::Vector2f& c) {
     Eigen::Matrix2f m;
     m << a - c, b - c;
     const Eigen::Vector2f w = m.inverse() * (p - c);
@@ -107,8 +106,7 @@ LbfModel prepareLbfModel(const std::vector<TrainingImage>& images, const LbfTrai
     return model;
 }
 
-std::vector<FeaturePoint> sampleFeaturePool(const LbfModel& model, int landmark, float radius, int count,
-                                            std::uint64_t seed) {
+std::vector<FeaturePoint> sampleFeaturePool(const LbfModel& model, int landmark, float radius, int count, std::uint64_t seed) {
     const Anchors anchors = anchorsOf(model, model.mean_shape);
     const auto triangles = triangulateAnchors(anchors);
     std::vector<cv::Point2f> hullPoints;
@@ -126,8 +124,7 @@ std::vector<FeaturePoint> sampleFeaturePool(const LbfModel& model, int landmark,
         const Eigen::Vector2f p = model.mean_shape.col(landmark) + rho * Eigen::Vector2f(std::cos(angle), std::sin(angle));
         if (cv::pointPolygonTest(hull, cv::Point2f(p.x(), p.y()), false) < 0) continue;
         for (const auto& t : triangles) {
-            const Eigen::Vector3f w = barycentric(p, anchors.col(t.anchors[0]), anchors.col(t.anchors[1]),
-                                                  anchors.col(t.anchors[2]));
+            const Eigen::Vector3f w = barycentric(p, anchors.col(t.anchors[0]), anchors.col(t.anchors[1]), anchors.col(t.anchors[2]));
             if (w.minCoeff() < -1e-5f) continue;
             FeaturePoint f;
             for (int k = 0; k < 3; ++k) f.anchors[k] = static_cast<std::uint8_t>(t.anchors[k]);
@@ -176,7 +173,8 @@ void trainLbfStage(LbfModel& model, const std::vector<TrainingImage>& images, st
         std::vector<std::uint8_t> intensity(static_cast<std::size_t>(n) * poolSize);
         for (int i = 0; i < n; ++i) {
             const cv::Mat& gray = images[samples[i].image].gray;
-            for (int p = 0; p < poolSize; ++p) intensity[std::size_t(i) * poolSize + p] = static_cast<std::uint8_t>(pixelAt(gray, pointOf(pool[p], anchors[i])));
+            for (int p = 0; p < poolSize; ++p)
+                intensity[std::size_t(i) * poolSize + p] = static_cast<std::uint8_t>(pixelAt(gray, pointOf(pool[p], anchors[i])));
         }
         auto diff = [&](int i, int a, int b) {
             return int(intensity[std::size_t(i) * poolSize + a]) - int(intensity[std::size_t(i) * poolSize + b]);
@@ -271,9 +269,7 @@ void trainLbfStage(LbfModel& model, const std::vector<TrainingImage>& images, st
     // the run time will actually apply.
     stage.setRegression(weights);
     model.stages.push_back(std::move(stage));
-    parallelFor(n, o.threads, [&](int i) {
-        applyStage(model, model.stages.back(), images[samples[i].image].gray, samples[i].shape);
-    });
+    parallelFor(n, o.threads, [&](int i) { applyStage(model, model.stages.back(), images[samples[i].image].gray, samples[i].shape); });
 }
 
 double meanNme(const std::vector<TrainingImage>& images, const std::vector<TrainingSample>& samples) {

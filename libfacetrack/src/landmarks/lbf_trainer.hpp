@@ -32,12 +32,12 @@ struct LbfTrainingOptions {
     /// outer-eye-corner distance; shrinks stage by stage. The last value
     /// repeats for any further stages.
     std::vector<float> radii = {0.5f, 0.35f, 0.25f, 0.18f, 0.13f, 0.1f, 0.08f};
-    float hull_padding = 0.1f;   ///< feature points stay inside the hull grown by this factor
-    int pool_size = 400;         ///< candidate feature points per landmark and stage
-    int split_candidates = 300;  ///< point pairs tried at each split
+    float hull_padding = 0.1f;          ///< feature points stay inside the hull grown by this factor
+    int pool_size = 400;                ///< candidate feature points per landmark and stage
+    int split_candidates = 300;         ///< point pairs tried at each split
     float tree_sample_fraction = 0.4f;  ///< share of the samples each tree is grown on
-    float ridge = 15000.f;       ///< L2 weight of the global regression (docs/benchmarks.md: it matters most)
-    int ridge_epochs = 4;        ///< block coordinate descent sweeps
+    float ridge = 15000.f;              ///< L2 weight of the global regression (docs/benchmarks.md: it matters most)
+    int ridge_epochs = 4;               ///< block coordinate descent sweeps
     int threads = 2;
     std::uint64_t seed = 1;
     /// Progress: a label and a fraction 0..1 of the current step.
@@ -60,7 +60,6 @@ double meanNme(const std::vector<TrainingImage>& images, const std::vector<Train
 /// Points of a feature pool for landmark l: uniform in the disc of `radius`
 /// (mean-shape units) around it, kept inside the padded hull, written as
 /// anchor combinations. Exposed for tests.
-std::vector<FeaturePoint> sampleFeaturePool(const LbfModel& model, int landmark, float radius, int count,
-                                            std::uint64_t seed);
+std::vector<FeaturePoint> sampleFeaturePool(const LbfModel& model, int landmark, float radius, int count, std::uint64_t seed);
 
 }  // namespace facetrack::landmarks

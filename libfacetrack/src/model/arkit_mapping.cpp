@@ -8,17 +8,15 @@ namespace facetrack {
 
 const std::array<std::string_view, kArkitBlendshapeCount>& arkitNames() {
     static const std::array<std::string_view, kArkitBlendshapeCount> names = {
-        "eyeBlinkLeft",     "eyeLookDownLeft",   "eyeLookInLeft",      "eyeLookOutLeft",    "eyeLookUpLeft",
-        "eyeSquintLeft",    "eyeWideLeft",       "eyeBlinkRight",      "eyeLookDownRight",  "eyeLookInRight",
-        "eyeLookOutRight",  "eyeLookUpRight",    "eyeSquintRight",     "eyeWideRight",      "jawForward",
-        "jawLeft",          "jawRight",          "jawOpen",            "mouthClose",        "mouthFunnel",
-        "mouthPucker",      "mouthLeft",         "mouthRight",         "mouthSmileLeft",    "mouthSmileRight",
-        "mouthFrownLeft",   "mouthFrownRight",   "mouthDimpleLeft",    "mouthDimpleRight",  "mouthStretchLeft",
-        "mouthStretchRight", "mouthRollLower",   "mouthRollUpper",     "mouthShrugLower",   "mouthShrugUpper",
-        "mouthPressLeft",   "mouthPressRight",   "mouthLowerDownLeft", "mouthLowerDownRight", "mouthUpperUpLeft",
-        "mouthUpperUpRight", "browDownLeft",     "browDownRight",      "browInnerUp",       "browOuterUpLeft",
-        "browOuterUpRight", "cheekPuff",         "cheekSquintLeft",    "cheekSquintRight",  "noseSneerLeft",
-        "noseSneerRight",   "tongueOut",
+        "eyeBlinkLeft",      "eyeLookDownLeft",    "eyeLookInLeft",       "eyeLookOutLeft",   "eyeLookUpLeft",     "eyeSquintLeft",
+        "eyeWideLeft",       "eyeBlinkRight",      "eyeLookDownRight",    "eyeLookInRight",   "eyeLookOutRight",   "eyeLookUpRight",
+        "eyeSquintRight",    "eyeWideRight",       "jawForward",          "jawLeft",          "jawRight",          "jawOpen",
+        "mouthClose",        "mouthFunnel",        "mouthPucker",         "mouthLeft",        "mouthRight",        "mouthSmileLeft",
+        "mouthSmileRight",   "mouthFrownLeft",     "mouthFrownRight",     "mouthDimpleLeft",  "mouthDimpleRight",  "mouthStretchLeft",
+        "mouthStretchRight", "mouthRollLower",     "mouthRollUpper",      "mouthShrugLower",  "mouthShrugUpper",   "mouthPressLeft",
+        "mouthPressRight",   "mouthLowerDownLeft", "mouthLowerDownRight", "mouthUpperUpLeft", "mouthUpperUpRight", "browDownLeft",
+        "browDownRight",     "browInnerUp",        "browOuterUpLeft",     "browOuterUpRight", "cheekPuff",         "cheekSquintLeft",
+        "cheekSquintRight",  "noseSneerLeft",      "noseSneerRight",      "tongueOut",
     };
     return names;
 }

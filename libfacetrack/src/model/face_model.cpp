@@ -171,8 +171,12 @@ namespace {
 
 EyeballGeometry publicEyeball(const model::Eyeball& eye) {
     const auto mm = [](const Eigen::Vector3f& v, float scale) { return Vec3{scale * v.x(), scale * v.y(), scale * v.z()}; };
-    return {static_cast<int>(eye.first_vertex), static_cast<int>(eye.last_vertex), mm(eye.centre, 10.f),
-            mm(eye.optical_axis, 1.f), 10.f * eye.radius, 10.f * eye.iris_radius};
+    return {static_cast<int>(eye.first_vertex),
+            static_cast<int>(eye.last_vertex),
+            mm(eye.centre, 10.f),
+            mm(eye.optical_axis, 1.f),
+            10.f * eye.radius,
+            10.f * eye.iris_radius};
 }
 
 }  // namespace

@@ -30,10 +30,10 @@ struct SparseBlendshape {
 struct Eyeball {
     std::uint32_t first_vertex = 0;  ///< sclera and iris vertices, inclusive range
     std::uint32_t last_vertex = 0;
-    Eigen::Vector3f centre = Eigen::Vector3f::Zero();        ///< rotation centre, cm
-    Eigen::Vector3f optical_axis = Eigen::Vector3f::UnitZ(); ///< unit, at rest
-    float radius = 0.f;       ///< eyeball (sclera sphere) radius, cm
-    float iris_radius = 0.f;  ///< cm
+    Eigen::Vector3f centre = Eigen::Vector3f::Zero();         ///< rotation centre, cm
+    Eigen::Vector3f optical_axis = Eigen::Vector3f::UnitZ();  ///< unit, at rest
+    float radius = 0.f;                                       ///< eyeball (sclera sphere) radius, cm
+    float iris_radius = 0.f;                                  ///< cm
 };
 
 struct FaceModelData {
@@ -47,8 +47,8 @@ struct FaceModelData {
     std::vector<SparseBlendshape> expressions;
 
     std::vector<Triangle> triangles;
-    Eigen::Matrix2Xf uvs;                    ///< 2 x U texture coordinates
-    std::vector<Triangle> triangle_uvs;      ///< per triangle corner, indices into uvs
+    Eigen::Matrix2Xf uvs;                ///< 2 x U texture coordinates
+    std::vector<Triangle> triangle_uvs;  ///< per triangle corner, indices into uvs
 
     std::array<std::uint32_t, kLandmarkCount> landmark_vertices{};
     /// For each jaw landmark 0..16, the vertices it may slide to as the head

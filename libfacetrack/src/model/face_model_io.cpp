@@ -49,12 +49,9 @@ Eyeball getEyeball(core::BinaryReader& r) {
     return e;
 }
 
-[[noreturn]] void invalid(const std::string& what, const std::string& why) {
-    throw Error(what + ": corrupt: " + why);
-}
+[[noreturn]] void invalid(const std::string& what, const std::string& why) { throw Error(what + ": corrupt: " + why); }
 
-void checkIndices(const std::vector<Triangle>& triangles, std::size_t limit, const std::string& what,
-                  const char* name) {
+void checkIndices(const std::vector<Triangle>& triangles, std::size_t limit, const std::string& what, const char* name) {
     for (const auto& t : triangles) {
         for (auto i : t) {
             if (i >= limit) invalid(what, std::string(name) + " index out of range");

@@ -22,8 +22,7 @@ namespace facetrack::model {
 
 struct LandmarkConvention {
     /// Per landmark, in the fit basis's frontal frame (cm), like FitBasis::neutral.
-    Eigen::Matrix<double, 3, kLandmarkCount> offsets_frontal_cm =
-        Eigen::Matrix<double, 3, kLandmarkCount>::Zero();
+    Eigen::Matrix<double, 3, kLandmarkCount> offsets_frontal_cm = Eigen::Matrix<double, 3, kLandmarkCount>::Zero();
     /// Native expression name -> f_j; a fitted expression not listed keeps 1.
     std::map<std::string, double> expression_prior;
 };

@@ -67,8 +67,6 @@ private:
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeNeutralStage(std::shared_ptr<const FaceModel> model) {
-    return std::make_unique<NeutralStage>(*model);
-}
+std::unique_ptr<pipeline::Stage> makeNeutralStage(std::shared_ptr<const FaceModel> model) { return std::make_unique<NeutralStage>(*model); }
 
 }  // namespace facetrack::neutral

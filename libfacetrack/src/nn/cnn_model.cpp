@@ -171,14 +171,11 @@ CnnModelData readCnnModel(const std::string& path) {
 
 }  // namespace nn
 
-CnnModel::CnnModel(std::shared_ptr<const nn::CnnModelData> data, std::string source)
-    : data_(std::move(data)), source_(std::move(source)) {
+CnnModel::CnnModel(std::shared_ptr<const nn::CnnModelData> data, std::string source) : data_(std::move(data)), source_(std::move(source)) {
     if (!data_) throw Error("CnnModel: null model data");
 }
 
-std::shared_ptr<const CnnModel> CnnModel::load(const std::string& path) {
-    return model::Internals::make(nn::readCnnModel(path), path);
-}
+std::shared_ptr<const CnnModel> CnnModel::load(const std::string& path) { return model::Internals::make(nn::readCnnModel(path), path); }
 
 std::string CnnModel::defaultPath() { return modelDirectory() + "/cnn_cascade.ftm"; }
 

@@ -13,7 +13,8 @@ const Eigen::VectorXd& PatchNet::predict(const cv::Mat& patch) { return predict(
 
 const Eigen::VectorXd& PatchNet::predict(std::span<const cv::Mat> patches) {
     if (static_cast<Eigen::Index>(patches.size()) * outputs_ != output_.size())
-        throw Error("PatchNet: " + std::to_string(patches.size()) + " patches for a net of batch " + std::to_string(output_.size() / outputs_));
+        throw Error("PatchNet: " + std::to_string(patches.size()) + " patches for a net of batch " +
+                    std::to_string(output_.size() / outputs_));
     for (std::size_t b = 0; b < patches.size(); ++b) {
         const cv::Mat& patch = patches[b];
         if (patch.type() != CV_8UC1 || patch.rows != size_ || patch.cols != size_)

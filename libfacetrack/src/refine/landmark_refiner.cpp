@@ -44,7 +44,8 @@ landmarks::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similar
     return toFrame.apply(layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 68>>(d.data()).cast<float>());
 }
 
-landmarks::Shape68 blendedLandmarks(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf, float trust) {
+landmarks::Shape68 blendedLandmarks(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf,
+                                    float trust) {
     const Eigen::Array<float, 1, 68> share = layout.share + trust * (1.f - layout.share);
     return (net.array().rowwise() * share + lbf.array().rowwise() * (1.f - share)).matrix();
 }
@@ -86,7 +87,8 @@ void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& 
     core::warpAffineGray(gray, toFrame, cv::Size(layout.size, layout.size), patch);
 }
 
-void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored, landmarks::Shape68& shape) {
+void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored,
+               landmarks::Shape68& shape) {
     const auto& index = mirrored ? kLeftSide : kRightSide;
     const SideShape patch = layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 11>>(e.data()).cast<float>();
     for (std::size_t i = 0; i < index.size(); ++i) {
@@ -99,7 +101,8 @@ void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen
     }
 }
 
-void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape) {
+void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches,
+                 landmarks::Shape68& shape) {
     const int width = gray.cols;
     std::array<cv::Matx23d, 2> toFrame;
     for (const int b : {0, 1}) {  // the right side, then the left mirrored

@@ -55,9 +55,9 @@ class PatchNet;
 namespace facetrack::refine {
 
 struct RefinerLayout {
-    int size = 0;                       ///< the patch's side, pixels
-    landmarks::Shape68 mean;            ///< m above
-    Eigen::Array<float, 1, 68> share;  ///< w above
+    int size = 0;                            ///< the patch's side, pixels
+    landmarks::Shape68 mean;                 ///< m above
+    Eigen::Array<float, 1, 68> share;        ///< w above
     float trust_from = 0.f, trust_to = 0.f;  ///< D0, D1 above
 };
 
@@ -106,12 +106,14 @@ void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& 
 
 /// `shape` with one side's 11 points moved to the net's outputs e (22 values: x_0, y_0, ...),
 /// blended by the shares.
-void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored, landmarks::Shape68& shape);
+void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored,
+               landmarks::Shape68& shape);
 
 /// Both sides of `shape` moved by the side net `net` (batch 2) in one call: each side's patch
 /// (warpSide) into `patches` (reused), the net's answers placed (placeSide). A side whose
 /// answer is not finite keeps its points.
-void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, landmarks::Shape68& shape);
+void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches,
+                 landmarks::Shape68& shape);
 
 /// q above from the net's outputs d, g from this face alone (a still image).
 landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,

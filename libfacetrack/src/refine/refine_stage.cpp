@@ -26,7 +26,8 @@ public:
     explicit RefineStage(std::shared_ptr<const CnnModel> model)
         : model_(std::move(model)),
           layout_(makeRefinerLayout(model::dataOf(*model_))),
-          net_(model::dataOf(*model_).refiner_net, layout_.size, 2 * landmarks::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {
+          net_(model::dataOf(*model_).refiner_net, layout_.size, 2 * landmarks::kLandmarks,
+               "landmark refiner '" + model_->sourcePath() + "'") {
         if (!model::dataOf(*model_).side_net.empty()) {
             side_layout_ = makeSideLayout(model::dataOf(*model_));
             side_net_.emplace(model::dataOf(*model_).side_net, side_layout_.size, 2 * static_cast<int>(kRightSide.size()),
@@ -35,14 +36,15 @@ public:
     }
 
     StageInfo info() const override {
-        const std::string trust = layout_.trust_to > layout_.trust_from
-                                      ? ", alone where it disagrees with LBF by " + std::to_string(100.f * layout_.trust_to).substr(0, 3) + " %"
-                                      : "";
-        const std::string sides =
-            side_net_ ? "; brows and eyes again in a " + std::to_string(side_layout_.size) + " px patch per side" : "";
-        return {"refine", true, "CNN landmark refiner, " + std::to_string(layout_.size) + " px patch, mean share " +
-                                    std::to_string(layout_.share.mean()).substr(0, 4) + trust + sides + "; nets on the " +
-                                    net_.engineName() + " (" + model_->sourcePath() + ")"};
+        const std::string trust = layout_.trust_to > layout_.trust_from ? ", alone where it disagrees with LBF by " +
+                                                                              std::to_string(100.f * layout_.trust_to).substr(0, 3) + " %"
+                                                                        : "";
+        const std::string sides = side_net_ ? "; brows and eyes again in a " + std::to_string(side_layout_.size) + " px patch per side"
+                                            : "";
+        return {"refine", true,
+                "CNN landmark refiner, " + std::to_string(layout_.size) + " px patch, mean share " +
+                    std::to_string(layout_.share.mean()).substr(0, 4) + trust + sides + "; nets on the " + net_.engineName() + " (" +
+                    model_->sourcePath() + ")"};
     }
 
     std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<RefineFaceState>(); }

@@ -87,7 +87,9 @@ bool agrees(const Box& followed, const Box& detection, float across) {
 }  // namespace
 
 TrackerCore::TrackerCore(std::unique_ptr<FaceDetector> detector, pipeline::StageList stages, const LifecycleSettings& settings)
-    : detector_(std::move(detector)), stages_(std::move(stages)), settings_(settings),
+    : detector_(std::move(detector)),
+      stages_(std::move(stages)),
+      settings_(settings),
       last_time_(std::numeric_limits<double>::quiet_NaN()) {
     if (!detector_) throw Error("Tracker: no face detector");
     names_ = {"detect", "verify"};
@@ -118,12 +120,12 @@ TrackerCore::TrackerCore(std::unique_ptr<FaceDetector> detector, pipeline::Stage
 std::vector<StageInfo> TrackerCore::stages() const {
     std::vector<StageInfo> out;
     out.push_back({"detect", true,
-                   detector_->kind() + " (" + detector_->modelPath() + "), while fewer than " +
-                       std::to_string(settings_.max_faces) + " face(s) are followed"});
+                   detector_->kind() + " (" + detector_->modelPath() + "), while fewer than " + std::to_string(settings_.max_faces) +
+                       " face(s) are followed"});
     out.push_back(settings_.verify_interval > 0
                       ? StageInfo{"verify", true,
-                                  "the detector on a crop around each followed face, every " +
-                                      std::to_string(settings_.verify_interval) + " frames and when a face is in doubt"}
+                                  "the detector on a crop around each followed face, every " + std::to_string(settings_.verify_interval) +
+                                      " frames and when a face is in doubt"}
                       : StageInfo{"verify", false, "off (TrackerConfig::verify_interval is 0)"});
     out.insert(out.end(), infos_.begin(), infos_.end());
     return out;
@@ -172,8 +174,7 @@ std::optional<Box> TrackerCore::findAgain(const pipeline::FaceTrack& face) {
     float nearestDistance = std::numeric_limits<float>::max();
     for (const auto& d : detector_->detect(core::viewOf(crop_))) {
         const auto toFrame = [&](float v, int origin) { return static_cast<float>(origin + v / scale); };
-        const Box box{toFrame(d.box.x0, region.x), toFrame(d.box.y0, region.y), toFrame(d.box.x1, region.x),
-                      toFrame(d.box.y1, region.y)};
+        const Box box{toFrame(d.box.x0, region.x), toFrame(d.box.y0, region.y), toFrame(d.box.x1, region.x), toFrame(d.box.y1, region.y)};
         const float distance = std::hypot(0.5f * (box.x0 + box.x1) - cx, 0.5f * (box.y0 + box.y1) - cy);
         if (distance < nearestDistance) {
             nearest = box;
@@ -267,18 +268,21 @@ void TrackerCore::follow(const pipeline::FrameInput& input, pipeline::FaceTrack&
 }
 
 void TrackerCore::dropLost() {
-    tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(), [](const pipeline::FaceTrack& t) { return t.lost; }),
-                  tracks_.end());
+    tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(), [](const pipeline::FaceTrack& t) { return t.lost; }), tracks_.end());
 }
 
 pipeline::FrameInput TrackerCore::beginFrame(const ImageView& frame, double time_s, FrameResult& out) {
     core::wrap(frame);  // validates the view before anything reads it
     const CameraConfig& c = settings_.camera;
-    pipeline::FrameInput input{frame, gray_,
-                               core::cameraFor(frame.width, frame.height, c.horizontal_fov_deg, c.focal_length_px,
-                                               c.principal_x_px, c.principal_y_px)};
-    out.camera = {static_cast<float>(input.camera.fx), static_cast<float>(input.camera.fy),
-                  static_cast<float>(input.camera.cx), static_cast<float>(input.camera.cy), frame.width, frame.height};
+    pipeline::FrameInput input{
+        frame, gray_,
+        core::cameraFor(frame.width, frame.height, c.horizontal_fov_deg, c.focal_length_px, c.principal_x_px, c.principal_y_px)};
+    out.camera = {static_cast<float>(input.camera.fx),
+                  static_cast<float>(input.camera.fy),
+                  static_cast<float>(input.camera.cx),
+                  static_cast<float>(input.camera.cy),
+                  frame.width,
+                  frame.height};
     // Time must increase; anything else (repeated, backwards, NaN) counts as one frame at 30 fps.
     const bool increasing = std::isfinite(time_s) && (!std::isfinite(last_time_) || time_s > last_time_);
     input.dt = increasing && std::isfinite(last_time_) ? time_s - last_time_ : 1.0 / 30.0;

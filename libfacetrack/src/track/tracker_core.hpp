@@ -102,8 +102,8 @@ private:
     LifecycleSettings settings_;
 
     std::vector<pipeline::FaceTrack> tracks_;
-    cv::Mat gray_, crop_;     // reused frame to frame
-    bool gray_ready_ = false; // gray_ holds this frame
+    cv::Mat gray_, crop_;      // reused frame to frame
+    bool gray_ready_ = false;  // gray_ holds this frame
     std::vector<float> appearance_;
     int next_id_ = 1;
     long frame_index_ = 0;
