@@ -1,6 +1,6 @@
 // Landmarks for one face from its detector box, on one core: facetrack's LBF
 // (one start, and the tracker's default number of starts averaged) against
-// OpenCV's FacemarkLBF trained on the same data (tools/train_facemark;
+// OpenCV's FacemarkLBF trained on the same data (tools/experiments/train_facemark;
 // its model is found at FACETRACK_FACEMARK_MODEL, else build/facemark_lbf.yaml),
 // and the whole 640x480 frame -> detect -> landmarks path through the Tracker.
 

@@ -424,7 +424,7 @@ TEST(Cli, EvalLandmarksFollowsEachFolderAsAClipWithSequences) {
 TEST(Cli, LandmarksComeFromThePipelineWithACascadesLandmarkNetAndFromLbfWithLbfOnly) {
     FACETRACK_REQUIRE_SHARED();
     // The cascade of the export fixtures: a random stage and a landmark net moving every point
-    // by (+3, 0) patch pixels (tools/train_cnn/make_parity_fixture.py): wiring, not accuracy.
+    // by (+3, 0) patch pixels (tools/train/make_parity_fixture.py): wiring, not accuracy.
     const auto bytes = [](const std::string& name) {
         std::ifstream in(test::sourceDir() + "/tests/data/" + name, std::ios::binary);
         return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());

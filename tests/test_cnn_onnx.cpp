@@ -1,5 +1,5 @@
-// The CNN export path (tools/train_cnn, docs/cnn.md): a net exported by train_stage.py's export()
-// loads in OpenCV's dnn and gives torch's outputs (fixture: tools/train_cnn/make_parity_fixture.py),
+// The CNN export path (tools/train/expression, docs/cnn.md): a net exported by train_stage.py's export()
+// loads in OpenCV's dnn and gives torch's outputs (fixture: tools/train/make_parity_fixture.py),
 // and so do the own kernels that run the nets;
 // the cascade's file format; the landmark net's geometry; the cnn stage wired into the Tracker;
 // the landmark refiner's geometry and its refine stage.

@@ -1,10 +1,10 @@
-// The dense teacher labels' pieces (tools/dense): nearest points on triangles,
+// The dense teacher labels' pieces (tools/data/dense): nearest points on triangles,
 // the teacher's file formats, the correspondence to the face model, and the
 // dense fit on synthetic faces of known parameters.
 
-#include "dense/correspondence.hpp"
-#include "dense/dense_fit.hpp"
-#include "dense/mediapipe_mesh.hpp"
+#include "data/dense/correspondence.hpp"
+#include "data/dense/dense_fit.hpp"
+#include "data/dense/mediapipe_mesh.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
 #include "model/internals.hpp"

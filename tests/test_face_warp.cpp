@@ -6,7 +6,7 @@
 #include "expression/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
-#include "profile/face_profiling.hpp"
+#include "data/profile/face_profiling.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgproc.hpp>

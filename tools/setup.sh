@@ -21,7 +21,7 @@ packages=(
   clang libclang-rt-14-dev
   # headless rendering for the demo's test, and video decoding
   xvfb xauth ffmpeg
-  # CNN training (tools/train_cnn, Debian's python3): torch on the CPU, with the threaded
+  # CNN training (tools/train/expression, Debian's python3): torch on the CPU, with the threaded
   # OpenBLAS (about 2x the default BLAS on small nets)
   python3-torch python3-numpy libopenblas0-pthread
 )

@@ -1,9 +1,8 @@
 #!/usr/bin/python3
-"""tools/train_cnn/fit_corrections.py's rule on figures whose answer is known."""
-import os, sys, unittest
+"""tools/experiments/fit_corrections.py's rule on figures whose answer is known."""
+import unittest
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "train_cnn"))
-import fit_corrections  # noqa: E402
+from tools.experiments import fit_corrections
 
 
 class Rule(unittest.TestCase):

@@ -1,13 +1,12 @@
 #!/usr/bin/python3
-"""tools/train_cnn/label_mirror_consistency.py on synthetic labels whose mirror images are known exactly."""
-import os, sys, unittest
+"""tools/experiments/label_mirror_consistency.py on synthetic labels whose mirror images are known exactly."""
+import unittest
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "train_cnn"))
-from label_mirror_consistency import RELIABILITY_SHAPES, axis_angle, partner, rotation  # noqa: E402
-import label_mirror_consistency as mc  # noqa: E402
-from label_pose_noise import angle_deg  # noqa: E402
+from tools.experiments import label_mirror_consistency as mc
+from tools.experiments.label_mirror_consistency import RELIABILITY_SHAPES, axis_angle, partner, rotation
+from tools.experiments.label_pose_noise import angle_deg
 
 SHAPES = sorted(set(RELIABILITY_SHAPES) | {partner(s) for s in RELIABILITY_SHAPES} | {"jawLeft", "jawRight"})
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""tools/pack_cnn's per-expression choices from the trainer's validation files, on a fixture net.
+"""tools/train/pack_cnn's per-expression choices from the trainer's validation files, on a fixture net.
 
     /usr/bin/python3 tests/tools/test_pack_cnn.py PACK_CNN
 """

@@ -1,11 +1,10 @@
 #!/usr/bin/python3
-"""tools/train_cnn/train_stage.py's validation figures on synthetic estimates whose answers are known."""
-import os, sys, unittest
+"""tools/train/expression/train_stage.py's validation figures on synthetic estimates whose answers are known."""
+import unittest
 
 import torch
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "train_cnn"))
-import train_stage  # noqa: E402
+from tools.train.expression import train_stage
 
 
 def updates(labels, starts):

@@ -7,7 +7,7 @@
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
-#include "dense/label_table.hpp"
+#include "data/dense/label_table.hpp"
 #include "core/environment.hpp"
 #include "facetrack/facetrack.hpp"
 

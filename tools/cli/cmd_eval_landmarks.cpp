@@ -8,7 +8,7 @@
 
 #include "app/image_view.hpp"
 #include "core/pts.hpp"
-#include "dense/label_table.hpp"
+#include "data/dense/label_table.hpp"
 #include "facetrack/facetrack.hpp"
 #include "landmarks/lbf.hpp"
 

@@ -4,7 +4,7 @@
 #include "app/image_view.hpp"
 #include "common/teacher.hpp"
 #include "core/environment.hpp"
-#include "dense/mediapipe_mesh.hpp"
+#include "data/dense/mediapipe_mesh.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <dlib/image_processing.h>

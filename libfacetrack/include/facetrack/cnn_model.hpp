@@ -3,10 +3,10 @@
 /// The CNN cascade of the "cnn" stage (thesis 4.4): small nets that regress,
 /// from the face texture warped into a canonical patch at the current pose and
 /// expression, the update to both, and optionally a last net that moves the
-/// 68 landmarks from where the refined face projects them. Trained by tools/train_cnn on the dense
+/// 68 landmarks from where the refined face projects them. Trained by tools/train/expression on the dense
 /// teacher labels (MediaPipe's mesh fitted with the face model; docs/cnn.md).
 /// A file may also hold, or hold only, the landmark refiner of the "refine" stage: a net that
-/// reads the face aligned by LBF's landmarks and moves them, before the fit (tools/train_refine),
+/// reads the face aligned by LBF's landmarks and moves them, before the fit (tools/train/refine),
 /// with or without a second net that then refines the brows and eyes, one side at a time.
 ///
 /// Like the other models it is data: load it once, it is immutable, share it

@@ -3,7 +3,7 @@
 /// The eye model of the gaze stage (Wang, Shi, Xia, Chai 2016): random forests
 /// over pixel tests on a normalised eye patch, one classifying each pixel as
 /// skin, sclera or iris, one regressing the eyelid aperture. Trained by
-/// tools/train_eyes on MediaPipe teacher labels (models/README.md, docs/gaze.md).
+/// tools/train/eyes on MediaPipe teacher labels (models/README.md, docs/gaze.md).
 ///
 /// Like the other models it is data: load it once, it is immutable, share it
 /// (by shared_ptr) between any number of Trackers on any threads.

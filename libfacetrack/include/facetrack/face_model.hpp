@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// The linear 3D face model (converted from ICT-FaceKit by tools/convert_face_model):
+/// The linear 3D face model (converted from ICT-FaceKit by tools/train/face_model):
 ///   V(a, b) = neutral + sum_i a_i * identity_i + sum_j b_j * expression_j
 /// in the model frame (see result.hpp). Every length this API gives is in
 /// millimetres (the file stores centimetres, ICT-FaceKit's unit).

@@ -3,7 +3,7 @@
 /// The 2D landmark model: local binary features regression (Ren et al.,
 /// "Face Alignment at 3000 FPS", CVPR 2014) with feature points kept inside
 /// the current shape's padded convex hull (Shi, thesis ch. 4). Trained by
-/// tools/train_landmarks; docs/landmarks.md has the details.
+/// tools/train/landmarks; docs/landmarks.md has the details.
 ///
 /// Like FaceModel, it is data: load it once, it is immutable, share it (by
 /// shared_ptr) between any number of Trackers on any threads.

@@ -4,7 +4,7 @@
 // Of V(a, b) = neutral + B_id a + sum_j b_j D_j (face_model_data.hpp) the fit
 // needs only the rows of the 68 landmark vertices and of the jaw-contour
 // candidates, and only the expressions that move the landmarks (the dense
-// teacher fit, tools/dense, uses the rows of other surface points). These rows
+// teacher fit, tools/data/dense, uses the rows of other surface points). These rows
 // are stored turned by R_0 = diag(1, -1, -1), the rotation that makes the
 // model face the camera (model +y up and +z out of the face become camera -y
 // and -z), so that a frontal head has rotation zero and the angle-axis

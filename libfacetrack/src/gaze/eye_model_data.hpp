@@ -45,7 +45,7 @@ struct EyeModelData {
     /// Optional (file version 2): an ONNX CNN that replaces the pixel forest:
     /// N x 1 x 28 x 40 normalised patches -> N x 3 x 14 x 20 class
     /// probabilities (skin, sclera, iris) on the grid above
-    /// (tools/train_eyes/train_iris_net.py). Empty: the pixel forest classifies.
+    /// (tools/train/eyes/train_iris_net.py). Empty: the pixel forest classifies.
     std::string iris_net;
     /// Optional (file version 3): the eye corners refined from the patch, a
     /// cascade of forests. Anchor: the patch origin; outputs: the outer and

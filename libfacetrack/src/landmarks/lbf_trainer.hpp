@@ -1,6 +1,6 @@
 #pragma once
 // Training an LbfModel (Ren et al. 2014), stage by stage. Not part of the
-// runtime library: tools/train_landmarks and the tests link it.
+// runtime library: tools/train/landmarks and the tests link it.
 
 #include "landmarks/lbf_model.hpp"
 

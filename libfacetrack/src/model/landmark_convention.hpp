@@ -1,5 +1,5 @@
 #pragma once
-// What the landmark fit learns from data (tools/train_convention,
+// What the landmark fit learns from data (tools/train/convention,
 // docs/expressions.md):
 // - where the 300-W annotators' 68 landmarks sit on the face model: an offset
 //   per landmark from the model's own landmark vertex. The fit adds them to

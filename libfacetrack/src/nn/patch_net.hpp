@@ -3,7 +3,7 @@
 // OpenCV's dnn): the cascade's stages' updates (update_net.hpp) and landmark
 // displacements (landmark_net.hpp) on the face patch (face_warp.hpp), and the
 // landmark and brow refiners (landmark_refiner.hpp). Trained by
-// tools/train_cnn/train_stage.py and tools/train_refine (docs/cnn.md).
+// tools/train/expression/train_stage.py and tools/train/refine (docs/cnn.md).
 //
 // The net's input is the patch standardised per patch, (I - mean) / sigma
 // (population sigma, I in [0, 1]), as the training script does. A net may

@@ -1,0 +1,1 @@
+"""Measurements the docs cite (docs/decisions.md): kept so that they can be repeated."""

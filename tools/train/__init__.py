@@ -1,0 +1,1 @@
+"""The trainers of the shipped models (tools/README.md); nets.py holds what they share."""

@@ -1,0 +1,1 @@
+"""The expression stage's net (docs/cnn.md)."""

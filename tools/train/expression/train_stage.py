@@ -1,0 +1,374 @@
+#!/usr/bin/python3
+"""Trains one CNN cascade stage (issue 17, docs/cnn.md): from the canonical face patch at a
+start's parameters, the update to the dense teacher label's parameters (pose about the face
+centre and 49 expressions: libfacetrack/src/cnn/update_net.hpp, written by make_cnn_samples).
+The labels are MediaPipe's predictions fitted with the face model: teacher labels, not ground truth.
+With --landmarks, the cascade's last net instead: the 68 annotated 300-W points' displacements
+from the start's projected landmarks (libfacetrack/src/cnn/landmark_net.hpp), trained on the
+300-W crops and their profiled copies (the clips have no annotated points).
+
+  /usr/bin/python3 -m tools.train.expression.train_stage [--samples build/cnn_samples]
+        [--out build/cnn/stage1] [--minutes 30] [--epochs N] [--resume] [--landmarks | --expressions]
+        [--hold-out-clips d3_,d10_]
+
+Trains on the samples whose split is "train" (300-W train crops, their profiled copies turned
+to large yaw, their copies with shapes moved when the folder has them, training clips), each
+epoch all the 300-W samples and copies and as many clip
+samples drawn afresh, half of them mirrored (patch flipped, update mirrored, left and right
+shapes swapped); reports on the 300-W validation crops and their profiled copies; the 300-W
+test crops and the held-out clips (d14, franck) are never read.
+Logs each epoch (losses, seconds) to OUT.log, keeps OUT.pt (resumable) and OUT.best.pt (the
+epoch with the lowest rotation error, or point error, on the 300-W validation crops) and exports the best as
+OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads).
+"""
+import argparse, copy, csv, math, os, sys, time
+
+import numpy as np
+import torch
+
+from tools.train import nets
+
+
+
+def load_all(loader, samples, name, splits):
+    """`loader`'s sets from each of the comma-separated sample folders, concatenated."""
+    parts = [t for t in (loader(d, name, splits) for d in samples.split(",")) if t is not None and len(t[0])]
+    if not parts:
+        return None
+    return torch.cat([t[0] for t in parts]), torch.cat([t[1] for t in parts]), parts[0][2]
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+
+# Clips left out of training besides the held-out split (--hold-out-clips): substrings of the key.
+HOLD_OUT_CLIPS = []
+
+
+def kept(row, splits):
+    return row[1] in splits and not any(c in row[0] for c in HOLD_OUT_CLIPS)
+
+
+def load(samples_dir, name, splits):
+    """Patches (uint8) and updates (start -> label, computed by make_cnn_samples) of the samples in `splits`."""
+    path = os.path.join(samples_dir, name + "_patches.npy")
+    if not os.path.exists(path):
+        return None
+    patches = np.load(path, mmap_mode="r")
+    header, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
+    first = header.index("d_omega_x")
+    keep = [i for i, r in enumerate(rows) if kept(r, splits)]
+    update = torch.tensor([[float(v) for v in rows[i][first:]] for i in keep], dtype=torch.float32)
+    return torch.as_tensor(np.asarray(patches[keep])), update, [c[2:] for c in header[first:]]
+
+
+# A landmark displacement larger than this (patch pixels) comes from a start turned nearly
+# edge-on, where the patch shows little of the face and the canonical map degenerates: not a
+# sample to learn from.
+MAX_DISPLACEMENT_PX = 24.0
+
+
+def load_labels(samples_dir, name, splits, names):
+    """The label's expressions (absolute weights, `names`' order) of the samples in `splits`, as load() keeps them."""
+    header, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
+    columns = [header.index("label_" + n) for n in names]
+    return torch.tensor([[float(r[c]) for c in columns] for r in rows if kept(r, splits)], dtype=torch.float32)
+
+
+def expression_agreement(pred, update, labels, names):
+    """Per expression, Pearson r between the estimate (start + predicted update, clamped to [0, 1])
+    and the label, where start = label - update."""
+    estimate = (labels - update[:, 6:] + pred[:, 6:]).clamp(0, 1)
+    out = {}
+    for k, n in enumerate(names):
+        a, b = estimate[:, k] - estimate[:, k].mean(), labels[:, k] - labels[:, k].mean()
+        denominator = (a.norm() * b.norm()).item()
+        out[n] = (a @ b).item() / denominator if denominator > 1e-9 else float("nan")
+    return out
+
+
+def write_agreement(out, agreement):
+    """OUT.validation_r.txt: per expression, r on the 300-W validation crops (pack_cnn reads it)."""
+    with open(out + ".validation_r.txt", "w") as f:
+        for n, r in agreement.items():
+            f.write(f"{n} {r:.4f}\n")
+
+
+# The share of faces at rest whose estimate stays under the rest level below.
+REST_QUANTILE = 0.9
+
+
+def rest_levels(pred, update, labels, names):
+    """Per expression, how high the estimate reads on faces that do not show the shape: its 0.9
+    quantile over the crops whose label is at most the label's median there."""
+    estimate = (labels - update[:, 6:] + pred[:, 6:]).clamp(0, 1)
+    out = {}
+    for k, n in enumerate(names):
+        at_rest = labels[:, k] <= labels[:, k].median()
+        out[n] = estimate[at_rest, k].quantile(REST_QUANTILE).item()
+    return out
+
+
+def write_rest_levels(out, levels):
+    """OUT.validation_rest.txt: per expression, its rest level on the 300-W validation crops
+    (pack_cnn --rest-from-validation makes it the shape's neutral)."""
+    with open(out + ".validation_rest.txt", "w") as f:
+        for n, v in levels.items():
+            f.write(f"{n} {v:.4f}\n")
+
+
+def predict(net, x, scale):
+    with torch.no_grad():
+        return torch.cat([net(x[i:i + 512]) for i in range(0, len(x), 512)]) * scale
+
+
+def load_landmarks(samples_dir, name, splits):
+    """Patches and landmark displacements (make_cnn_samples' OUT/NAME_landmarks.npy) of the samples in `splits`."""
+    path = os.path.join(samples_dir, name + "_landmarks.npy")
+    if not os.path.exists(path):
+        return None
+    patches = np.load(os.path.join(samples_dir, name + "_patches.npy"), mmap_mode="r")
+    targets = np.load(path)
+    _, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
+    size = np.linalg.norm(targets.reshape(len(targets), -1, 2), axis=2).max(1)
+    keep = [i for i, r in enumerate(rows) if kept(r, splits) and size[i] <= MAX_DISPLACEMENT_PX]
+    columns = [f"l_{axis}{i}" for i in range(targets.shape[1] // 2) for axis in "xy"]
+    return torch.as_tensor(np.asarray(patches[keep])), torch.as_tensor(targets[keep]), columns
+
+
+def landmark_mirror_permutation(samples_dir, columns):
+    """Per displacement output, the output it becomes in the mirrored face, and its sign: point i
+    goes to point m(i) (OUT/landmarks_mirror.txt), its x displacement negated."""
+    with open(os.path.join(samples_dir, "landmarks_mirror.txt")) as f:
+        mirror = [int(v) for v in f.read().split()]
+    order = [2 * mirror[i // 2] + i % 2 for i in range(len(columns))]
+    return torch.tensor(order), torch.tensor([-1.0, 1.0] * (len(columns) // 2))
+
+
+def mirror_permutation(columns):
+    """Per update output, the output it becomes in the mirrored face, and its sign: the rotation
+    M R M with M = diag(-1, 1, 1) is the angle-axis (w_x, -w_y, -w_z), the centre's move (-c_x, c_y, c_z)
+    (the face centre lies on the face's mirror plane); left and right shapes swap."""
+    names = columns[6:]
+    def swap(n):
+        for a, b in (("_L", "_R"), ("Left", "Right")):
+            if n.endswith(a): return n[:-len(a)] + b
+            if n.endswith(b): return n[:-len(b)] + a
+        return n
+    order = [0, 1, 2, 3, 4, 5] + [6 + names.index(swap(n)) for n in names]
+    sign = [1, -1, -1, -1, 1, 1] + [1] * len(names)
+    return torch.tensor(order), torch.tensor(sign, dtype=torch.float32)
+
+
+def standardise(patches):
+    """uint8 patches -> per patch zero mean, unit (population) standard deviation: what the
+    runtime does before the net."""
+    return nets.standardise(patches.float()[:, None] / 255.0)
+
+
+def export(net, path, scale=None, output="update"):
+    """ONNX opset 13 in eval mode: BatchNorm folded into the convolutions, only Conv, Relu,
+    Flatten and Gemm, which OpenCV 4.6's dnn loads. `scale`: per output, folded into the last
+    layer, so that the file gives the update itself."""
+    net = copy.deepcopy(net).eval()
+    if scale is not None:
+        with torch.no_grad():
+            last = net.head[-1]
+            last.weight.mul_(scale[:, None])
+            last.bias.mul_(scale)
+    nets.export_onnx(net, (1, 1, 64, 64), path, output)
+
+
+def write_columns(out, columns):
+    """The outputs' names beside the net (pack_cnn checks them)."""
+    with open(out + ".columns.txt", "w") as f:
+        f.write("\n".join(columns) + "\n")
+
+
+class Stage(torch.nn.Module):
+    """64x64 grey -> (6 + E): four stride-2 conv blocks (BatchNorm, ReLU), two linear layers."""
+
+    def __init__(self, outputs, widths=(16, 32, 64, 96), hidden=256, dropout=0.0):
+        super().__init__()
+        layers, channels = [], 1
+        for width in widths:
+            layers += [torch.nn.Conv2d(channels, width, 3, stride=2, padding=1, bias=False), torch.nn.BatchNorm2d(width),
+                       torch.nn.ReLU()]
+            channels = width
+        self.features = torch.nn.Sequential(*layers)
+        self.head = torch.nn.Sequential(torch.nn.Flatten(), torch.nn.Linear(widths[-1] * 4 * 4, hidden), torch.nn.ReLU(),
+                                        *([torch.nn.Dropout(dropout)] if dropout > 0 else []), torch.nn.Linear(hidden, outputs))
+
+    def forward(self, x):
+        return self.head(self.features(x))
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--samples", default="build/cnn_samples", help="make_cnn_samples' folder, or several, comma-separated")
+    p.add_argument("--out", default="build/cnn/stage1")
+    p.add_argument("--minutes", type=float, default=30)
+    p.add_argument("--epochs", type=int, default=0,
+                   help="stop after this many epochs (with --resume, counted from the start); 0: by --minutes only")
+    p.add_argument("--batch", type=int, default=128)
+    p.add_argument("--resume", action="store_true")
+    p.add_argument("--export-only", action="store_true", help="export OUT.pt's net (e.g. while it trains) and stop")
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--landmarks", action="store_true", help="train the landmark net (68 displacements) instead of a stage")
+    p.add_argument("--expressions", action="store_true",
+                   help="a stage that reads the expressions (pack_cnn --expressions-only): they weigh 20x the pose in the "
+                        "loss and choose the best epoch; give samples whose starts are the fit's (make_cnn_samples "
+                        "--starts-from fit), as at run time: starts near the label would teach corrections, not readings")
+    p.add_argument("--dropout", type=float, default=0.0, help="dropout before the last layer (not in the export)")
+    p.add_argument("--widths", default="16,32,64,96", help="the four conv blocks' channels, comma-separated")
+    p.add_argument("--hidden", type=int, default=256, help="the hidden linear layer's width")
+    p.add_argument("--hold-out-clips", default="", help="clips also left out of training, comma-separated parts of their names")
+    a = p.parse_args()
+    HOLD_OUT_CLIPS.extend(c for c in a.hold_out_clips.split(",") if c)
+    nets.setup_torch(a.threads, seed=1)
+    os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
+
+    loader = load_landmarks if a.landmarks else load
+    faces, profiled, moved, clips = (load_all(loader, a.samples, n, {"train"}) for n in ("faces300w", "profiled", "moved", "clips"))
+    sets = [t for t in (faces, profiled, moved, clips) if t is not None]
+    columns = faces[2]
+    x_train = torch.cat([t[0] for t in sets])
+    y_train = torch.cat([t[1] for t in sets])
+    # The copies, turned or with shapes moved (make_cnn_samples --profiled, --expression-copies), count as one set.
+    n_faces = len(faces[0])
+    n_profiled = sum(len(t[0]) for t in (profiled, moved) if t is not None)
+    n_clips = len(clips[0]) if clips is not None else 0
+    validation = {}
+    for name in ("faces300w", "profiled"):
+        v = load_all(loader, a.samples, name, {"validation"})
+        if v is None or len(v[0]) == 0:
+            continue
+        if not a.landmarks:  # the label's own patches count in training, not in these figures
+            perturbed = v[1][:, :6].abs().sum(1) > 0
+            v = (v[0][perturbed], v[1][perturbed])
+        labels = None
+        if a.expressions:
+            labels = torch.cat([load_labels(d, name, {"validation"}, columns[6:]) for d in a.samples.split(",")
+                                if os.path.exists(os.path.join(d, name + "_samples.csv"))])[perturbed]
+        validation[name] = (standardise(v[0]), v[1], labels)
+    flip_order, flip_sign = landmark_mirror_permutation(a.samples.split(",")[0], columns) if a.landmarks else mirror_permutation(columns)
+    # The net regresses each output over its spread on the training targets (about 9x faster
+    # to train than raw radians and depth fractions of very different sizes; export folds the
+    # spread back in); the loss weighs outputs alike within pose and within expressions, the
+    # expressions together a quarter as much as pose; displacements all alike.
+    scale = y_train.std(0).clamp_min(1e-3)
+    if a.landmarks:
+        weight = torch.ones(y_train.shape[1])
+    elif a.expressions:  # 49 expressions together 20x as much as the pose's six outputs
+        n_expr = y_train.shape[1] - 6
+        weight = torch.cat([torch.ones(6), torch.full((n_expr,), 120.0 / n_expr)])
+    else:
+        weight = torch.cat([torch.ones(6), torch.full((y_train.shape[1] - 6,), 0.25)])
+    weight = weight / weight.sum()
+    output_name = "displacement" if a.landmarks else "update"
+    print(f"training samples: {n_faces} 300-W, {n_profiled} profiled or moved, {n_clips} clip; validation "
+          f"{ {k: len(v[0]) for k, v in validation.items()} }; outputs {y_train.shape[1]}", flush=True)
+
+    widths = tuple(int(w) for w in a.widths.split(","))
+    net = Stage(y_train.shape[1], widths, a.hidden, a.dropout)
+    opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
+    epoch, started, best = 0, time.time(), float("inf")
+    if a.export_only:
+        state = torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))
+        # the layers it was trained with
+        net = Stage(y_train.shape[1], state.get("widths", widths), state.get("hidden", a.hidden), state.get("dropout", a.dropout))
+        net.load_state_dict(state["net"])
+        # The spread the net was trained with (older checkpoints lack it: then the given samples' own,
+        # which must be the training run's --samples).
+        export(net, a.out + ".onnx", state.get("scale", scale), output_name)
+        write_columns(a.out, columns)
+        if a.expressions and "faces300w" in validation:
+            net.eval()
+            x_val, y_val, labels_val = validation["faces300w"]
+            write_rest_levels(a.out, rest_levels(predict(net, x_val, state.get("scale", scale)), y_val, labels_val, columns[6:]))
+        print(f"wrote {a.out}.onnx", flush=True)
+        return
+    if a.resume and os.path.exists(a.out + ".pt"):
+        state = torch.load(a.out + ".pt")
+        net.load_state_dict(state["net"]); opt.load_state_dict(state["opt"]); epoch = state["epoch"]
+        best = state.get("best", best)
+        print(f"resumed at epoch {epoch}", flush=True)
+    log = open(a.out + ".log", "a")
+    deadline = started + 60 * a.minutes
+    while time.time() < deadline and (a.epochs <= 0 or epoch < a.epochs):
+        net.train()
+        # All 300-W and profiled samples, and as many clip samples as 300-W ones (the clips are 8
+        # people, their frames alike).
+        start_clips = n_faces + n_profiled
+        order = torch.randperm(start_clips)
+        if n_clips:
+            order = torch.cat([order, start_clips + torch.randint(n_clips, (min(n_faces, n_clips),))])
+        order = order[torch.randperm(len(order))]
+        total = 0.0
+        for i in range(0, len(order), a.batch):
+            idx = order[i:i + a.batch]
+            x, y = standardise(x_train[idx]), y_train[idx]
+            flip = torch.rand(len(idx)) < 0.5
+            x[flip] = x[flip].flip(3)
+            y[flip] = y[flip][:, flip_order] * flip_sign
+            if torch.rand(1).item() < 0.5:  # photometric: contrast and brightness on the standardised patch
+                x = x * (0.8 + 0.4 * torch.rand(len(idx), 1, 1, 1)) + 0.2 * torch.randn(len(idx), 1, 1, 1)
+            loss = (((net(x) - y / scale) ** 2).mean(0) * weight).sum()
+            opt.zero_grad(); loss.backward(); opt.step()
+            total += loss.item() * len(idx)
+            if (i // a.batch) % 100 == 99:
+                print(f"  epoch {epoch + 1}: {i + len(idx)} / {len(order)} samples, loss {total / (i + len(idx)):.4f}, "
+                      f"{time.time() - started:.0f} s", flush=True)
+        epoch += 1
+        net.eval()
+        line = f"epoch {epoch} train loss {total / len(order):.4f}; validation"
+        score = float("inf")
+        with torch.no_grad():
+            for name, (x_val, y_val, labels_val) in validation.items():
+                pred = predict(net, x_val, scale)
+                if a.landmarks:  # mean point distance, patch pixels
+                    before = y_val.view(len(y_val), -1, 2).norm(dim=2).mean().item()
+                    after = (pred - y_val).view(len(y_val), -1, 2).norm(dim=2).mean().item()
+                    if name == "faces300w":
+                        score = after
+                    line += f" {name}: point error {before:.3f} -> {after:.3f} patch px;"
+                    continue
+                rot_before = y_val[:, :3].norm(dim=1) * 180 / math.pi
+                rot_after = (pred[:, :3] - y_val[:, :3]).norm(dim=1) * 180 / math.pi
+                shift_before = y_val[:, 3:6].norm(dim=1).mean().item() * 100
+                shift_after = (pred[:, 3:6] - y_val[:, 3:6]).norm(dim=1).mean().item() * 100
+                expr_before = y_val[:, 6:].abs().mean().item()
+                expr_after = (pred[:, 6:] - y_val[:, 6:]).abs().mean().item()
+                if name == "faces300w":
+                    score = expr_after if a.expressions else rot_after.mean().item()
+                    if a.expressions:
+                        agreement = expression_agreement(pred, y_val, labels_val, columns[6:])
+                        line += " r " + " ".join(f"{n} {agreement[n]:.2f}" for n in ("browDown_L", "browInnerUp_L", "mouthPucker", "mouthFunnel"))
+                        if score < best:
+                            write_agreement(a.out, agreement)
+                            write_rest_levels(a.out, rest_levels(pred, y_val, labels_val, columns[6:]))
+                line += (f" {name}: rotation {rot_before.mean():.2f} -> {rot_after.mean():.2f} deg (within 3 deg "
+                         f"{(rot_before < 3).float().mean() * 100:.0f} -> {(rot_after < 3).float().mean() * 100:.0f} %), "
+                         f"centre {shift_before:.2f} -> {shift_after:.2f} % of depth, expression MAE {expr_before:.4f} -> {expr_after:.4f};")
+        line += f" {time.time() - started:.0f} s"
+        print(line, flush=True); log.write(line + "\n"); log.flush()
+        torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best, "scale": scale,
+                    "dropout": a.dropout, "widths": widths, "hidden": a.hidden}, a.out + ".pt")
+        if score < best:  # the net that exports: the best on the validation crops (the test crops choose nothing)
+            best = score
+            torch.save({"net": net.state_dict(), "epoch": epoch, "scale": scale, "dropout": a.dropout, "widths": widths,
+                        "hidden": a.hidden}, a.out + ".best.pt")
+    if os.path.exists(a.out + ".best.pt"):
+        net.load_state_dict(torch.load(a.out + ".best.pt")["net"])
+    net.eval()
+
+    export(net, a.out + ".onnx", scale, output_name)
+    write_columns(a.out, columns)
+    print(f"wrote {a.out}.onnx", flush=True)
+
+
+if __name__ == "__main__":
+    main()

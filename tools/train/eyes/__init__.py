@@ -1,0 +1,1 @@
+"""The gaze stage's iris net (docs/gaze.md)."""

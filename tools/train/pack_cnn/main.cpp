@@ -1,0 +1,243 @@
+// pack_cnn: the CNN cascade's model file (facetrack/cnn_model.hpp) from the
+// ONNX exports of tools/train/expression/train_stage.py (issue 17, docs/cnn.md).
+//
+//   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
+//                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv | --rest-from-validation]
+//                                            [--min-validation-r R]]
+//                        [--mirror-average] [--corrects-fit]
+//                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
+//                        --out build/cnn/cascade.ftm [--provenance "..."]
+//
+// --base: start from that file's nets (the options given replace theirs). --sides: the brow and eye
+// refiner of tools/train/refine/train_region.py (landmark_refiner.hpp, one side at a time), with
+// its NET.side.txt beside it (the patch size, the 22 mean-shape values and the 11 shares).
+//
+// --refiner: the landmark refiner of tools/train/refine/train_refine.py (cnn/landmark_refiner.hpp),
+// with its NET.refiner.txt beside it (the patch size, the 136 mean-shape values, the 68 shares and,
+// when the trainer chose them, the trust ramp D0 D1); with it --nets may be left out.
+//
+// --expressions-only: the nets were trained to read expressions (train_stage.py --expressions);
+// the stage keeps the fit's pose and the shapes the fit estimates (cnn_model_data.hpp).
+// --neutral-from: each expression's neutral w0, the median of its dense label over the file's
+// training rows (cnn_model_data.hpp says why). --rest-from-validation: each expression's neutral is
+// instead its rest level on the 300-W validation crops, how high the net reads it on faces that do
+// not show it (the trainer's OUT.validation_rest.txt beside the last net: the estimate's 0.9
+// quantile over the crops whose label is at most the median; a pair's mean), so that a relaxed
+// face reads 0 on nine in ten such faces. --min-validation-r: only the expressions whose
+// estimate agreed with the labels on the 300-W validation crops by at least R (Pearson, the mean of
+// a left / right pair; the trainer's OUT.validation_r.txt beside the net) are reported.
+// --mirror-average: the stages read each patch and its mirror image and apply the mean update
+// (cnn/update_net.hpp, refine), so that a face and its mirror image read alike; twice the nets' time.
+// --corrects-fit (with --expressions-only): the stage also corrects the shapes the fit estimates
+// (cnn_model_data.hpp).
+//
+// Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
+// the update outputs cnn/update_net.hpp defines, with the labelled expressions
+// of the dense teacher labels in the face model's names, or for the landmark
+// net the 68 displacements of cnn/landmark_net.hpp (l_x0, l_y0, ..., l_y67);
+// every net is run once here to check it loads in OpenCV's dnn and gives that
+// many outputs.
+
+#include "app/args.hpp"
+#include "app/tool_main.hpp"
+#include "data/dense/label_table.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "core/binary_io.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
+#include "facetrack/face_model.hpp"
+#include "fit/fit_basis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <fstream>
+#include <sstream>
+
+using namespace facetrack;
+
+namespace {
+
+std::string readBytes(const std::string& path) { return core::readFileBytes(path, "'" + path + "'"); }
+
+std::string columnsPath(const std::string& onnxPath) {
+    return onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + ".columns.txt";
+}
+
+std::vector<std::string> columns(const std::string& onnxPath) {
+    std::stringstream lines(readBytes(columnsPath(onnxPath)));
+    std::vector<std::string> names;
+    for (std::string line; std::getline(lines, line);)
+        if (!line.empty()) names.push_back(line);
+    return names;
+}
+
+/// The expression names of a net's columns file: the lines after the six pose outputs.
+std::vector<std::string> expressionColumns(const std::string& onnxPath) {
+    const std::string path = columnsPath(onnxPath);
+    const std::vector<std::string> names = columns(onnxPath);
+    const std::vector<std::string> pose = {"omega_x", "omega_y", "omega_z", "centre_x", "centre_y", "centre_z"};
+    if (names.size() < pose.size() || !std::equal(pose.begin(), pose.end(), names.begin())) {
+        throw Error(path + ": expected the update's six pose outputs (" + pose.front() + " ... " + pose.back() + ") first");
+    }
+    return {names.begin() + static_cast<std::ptrdiff_t>(pose.size()), names.end()};
+}
+
+/// Per expression, the value the trainer's OUT.SUFFIX beside the last net gives it (lines "name
+/// value"), averaged with its mirror partner's (fit::mirrorName: browDown_L and browDown_R, jawLeft
+/// and jawRight) so that a face and its mirror image are treated alike.
+std::vector<double> pairAveraged(const std::string& onnxPath, const std::string& suffix, const std::vector<std::string>& names) {
+    const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + suffix;
+    std::stringstream lines(readBytes(path));
+    std::map<std::string, double> value;
+    std::string name, text;
+    while (lines >> name >> text) value[name] = std::stod(text);  // "nan" too: a constant label
+    const auto of = [&](const std::string& n) {
+        const auto it = value.find(n);
+        if (it == value.end()) throw Error(path + " has no " + n);
+        return std::isfinite(it->second) ? it->second : 0.0;
+    };
+    std::vector<double> out;
+    for (const auto& n : names) {
+        const std::string partner = fit::mirrorName(n);
+        out.push_back(0.5 * (of(n) + of(partner.empty() ? n : partner)));
+    }
+    return out;
+}
+
+/// Per name, the median of its column over the table's training rows.
+std::vector<float> trainingMedians(const std::string& path, const std::vector<std::string>& names) {
+    const dense::LabelTable table = dense::readLabelTable(path);
+    const dense::LabelColumns columns = dense::labelColumns(table, names);
+    std::vector<float> medians;
+    for (const int c : columns.expressions) {
+        std::vector<double> values;
+        for (const auto& row : table.rows) {
+            if (row.split == "train") values.push_back(row.values[static_cast<std::size_t>(c)]);
+        }
+        if (values.empty()) throw Error(path + ": no training rows");
+        std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
+        medians.push_back(std::clamp(static_cast<float>(values[values.size() / 2]), 0.f, 0.9f));
+    }
+    return medians;
+}
+
+int run(int argc, char** argv) {
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
+                           {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r",
+                            "--refiner", "--sides", "--base"},
+                           {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation"});
+    if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
+        std::puts(
+            "usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
+            "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
+            "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation]");
+        return args.has("--help") ? 0 : 2;
+    }
+    const auto nets = tools::splitList(args.get("--nets", ""));
+    auto rounds = tools::splitList(args.get("--rounds", ""));
+    if (rounds.empty()) rounds.assign(nets.size(), "1");
+    if (rounds.size() != nets.size()) throw Error("--rounds needs one count per net");
+
+    const auto face = FaceModel::loadDefault();
+    nn::CnnModelData model;
+    if (args.has("--base")) {
+        model = nn::readCnnModel(args.get("--base"));
+        if (!nets.empty()) model.stages.clear();
+    }
+    model.provenance = args.get("--provenance", model.provenance);
+    model.expressions_only = model.expressions_only || args.has("--expressions-only");
+    model.corrects_fit = model.corrects_fit || args.has("--corrects-fit");
+    if (model.corrects_fit && !model.expressions_only) throw Error("--corrects-fit goes with --expressions-only");
+    for (std::size_t i = 0; i < nets.size(); ++i) {
+        const auto names = expressionColumns(nets[i]);
+        if (i == 0) model.expressions = names;
+        if (names != model.expressions) throw Error(nets[i] + ": its expressions differ from the first net's");
+        nn::expressionIndices(face->expressionNames(), names);  // every name is the face model's, or it throws
+        nn::CnnStageData stage;
+        stage.rounds = std::stoi(rounds[i]);
+        stage.onnx = readBytes(nets[i]);
+        nn::PatchNet check(stage.onnx, model.patch_size, 6 + static_cast<int>(names.size()), nets[i]);  // loads and runs, or throws
+        model.stages.push_back(std::move(stage));
+        std::printf("stage %zu: %s, %d round(s), %zu bytes\n", i + 1, nets[i].c_str(), model.stages.back().rounds,
+                    model.stages.back().onnx.size());
+    }
+    if (args.has("--mirror-average")) {
+        if (model.stages.empty()) throw Error("--mirror-average needs cascade stages (--nets)");
+        expression::updateMirror(model.expressions);  // every sided expression's partner is there, or it throws
+        model.mirror_averaged = true;
+    }
+    if (args.has("--landmark-net")) {
+        const std::string path = args.get("--landmark-net");
+        std::vector<std::string> expected;
+        for (int i = 0; i < model::kLandmarkCount; ++i)
+            for (const char* axis : {"l_x", "l_y"}) expected.push_back(axis + std::to_string(i));
+        if (columns(path) != expected) throw Error(columnsPath(path) + ": expected the 68 landmark displacements l_x0, l_y0, ..., l_y67");
+        model.landmark_net = readBytes(path);
+        nn::PatchNet check(model.landmark_net, model.patch_size, expression::kLandmarkOutputs, path);
+        std::printf("landmark net: %s, %zu bytes\n", path.c_str(), model.landmark_net.size());
+    }
+    if (args.has("--neutral-from") && args.has("--rest-from-validation")) throw Error("--neutral-from or --rest-from-validation, not both");
+    if (args.has("--neutral-from") || args.has("--rest-from-validation")) {
+        if (!model.expressions_only) throw Error("--neutral-from and --rest-from-validation go with --expressions-only");
+        model.neutral.clear();
+        if (args.has("--neutral-from")) {
+            model.neutral = trainingMedians(args.get("--neutral-from"), model.expressions);
+        } else {
+            if (nets.empty()) throw Error("--rest-from-validation needs the nets (--nets)");
+            for (const double level : pairAveraged(nets.back(), ".validation_rest.txt", model.expressions))
+                model.neutral.push_back(std::clamp(static_cast<float>(level), 0.f, 0.9f));
+        }
+        for (std::size_t k = 0; k < model.neutral.size(); ++k) {
+            if (model.neutral[k] >= 0.05f) std::printf("neutral %s %.3f\n", model.expressions[k].c_str(), model.neutral[k]);
+        }
+    }
+    if (args.has("--min-validation-r")) {
+        if (!model.expressions_only) throw Error("--min-validation-r goes with --expressions-only");
+        const double minimum = args.number("--min-validation-r", 0.5);
+        model.reported.clear();
+        for (const double r : pairAveraged(nets.back(), ".validation_r.txt", model.expressions)) model.reported.push_back(r >= minimum);
+        std::printf("reported:");
+        for (std::size_t k = 0; k < model.reported.size(); ++k) {
+            if (model.reported[k]) std::printf(" %s", model.expressions[k].c_str());
+        }
+        std::printf("\n");
+    }
+    if (args.has("--refiner")) {
+        const std::string path = args.get("--refiner");
+        model.refiner_net = readBytes(path);
+        std::stringstream layout(readBytes(path.substr(0, path.size() - std::string(".onnx").size()) + ".refiner.txt"));
+        layout >> model.refiner_patch_size;
+        model.refiner_mean.resize(136);
+        model.refiner_share.resize(68);
+        for (float& v : model.refiner_mean) layout >> v;
+        for (float& v : model.refiner_share) layout >> v;
+        if (!layout) throw Error(path + ": its .refiner.txt needs the patch size, 136 mean-shape values and 68 shares");
+        float from = 0.f, to = 0.f;
+        if (layout >> from >> to) model.refiner_trust_from = from, model.refiner_trust_to = to;
+        nn::PatchNet check(model.refiner_net, model.refiner_patch_size, 136, path);
+        std::printf("landmark refiner: %s, %d px, %zu bytes, trust ramp %.3f-%.3f\n", path.c_str(), model.refiner_patch_size,
+                    model.refiner_net.size(), model.refiner_trust_from, model.refiner_trust_to);
+    }
+    if (args.has("--sides")) {
+        const std::string path = args.get("--sides");
+        model.side_net = readBytes(path);
+        std::stringstream layout(readBytes(path.substr(0, path.size() - std::string(".onnx").size()) + ".side.txt"));
+        layout >> model.side_patch_size;
+        model.side_mean.resize(22);
+        model.side_share.resize(11);
+        for (float& v : model.side_mean) layout >> v;
+        for (float& v : model.side_share) layout >> v;
+        if (!layout) throw Error(path + ": its .side.txt needs the patch size, 22 mean-shape values and 11 shares");
+        nn::PatchNet check(model.side_net, model.side_patch_size, 22, path);
+        std::printf("brow and eye refiner: %s, %d px, %zu bytes\n", path.c_str(), model.side_patch_size, model.side_net.size());
+    }
+    nn::writeCnnModel(args.get("--out"), model);
+    std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return tools::runTool("pack_cnn", run, argc, argv); }

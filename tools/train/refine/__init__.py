@@ -1,0 +1,1 @@
+"""The landmark refiner and its brow and eye net (docs/cnn.md)."""
