@@ -75,7 +75,7 @@ BENCHMARK(BM_Gaze_BothEyes)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinT
 
 /// The same stage, the model as it is, on 16 frames in turn (every fifth from frame 40). Why: on one
 /// frame repeated the stage reads about half what it costs in the tracker, most likely because the
-/// branch predictor learns every forest walk's path (docs/benchmarks.md, "Session 32").
+/// branch predictor learns every forest walk's path.
 void BM_Gaze_BothEyesFramesInTurn(benchmark::State& state) {
     const Models models = benchModels();
     if (!models.eyes) {

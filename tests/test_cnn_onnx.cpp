@@ -908,7 +908,7 @@ TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
     }
     ASSERT_GE(count, 40);
     std::printf("on %d lfpw test faces: LBF %.2f%%, refined %.2f%%\n", count, 100 * lbfSum / count, 100 * refinedSum / count);
-    EXPECT_LT(refinedSum, 0.98 * lbfSum);  // 0.89 with session 21's net (4.76 -> 4.25 % on 55 faces)
+    EXPECT_LT(refinedSum, 0.98 * lbfSum);  // 0.89 with the refiner of the shipped file's first version (4.76 -> 4.25 % on 55 faces)
 }
 
 }  // namespace

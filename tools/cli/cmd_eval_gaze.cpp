@@ -44,8 +44,8 @@ The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, 
   synthetic  N renders of the face model with a textured iris at known gaze (see docs/gaze.md):
            angular error by inter-ocular bin, mean and p95; the mean signed error (bias) and the
            single-frame head pose's error; then the targets' short sequences. The faces have
-           painted brows and lips; --bare-faces leaves them out (the renders until session 13,
-           on which the landmarks, trained on photographs, placed the brows by guesswork)
+           painted brows and lips; --bare-faces leaves them out (on bare renders the landmarks,
+           trained on photographs, place the brows by guesswork)
 --eyes FILE evaluates another eye model than the shipped one (e.g. a candidate from train_eyes).
 Defaults: the held-out clips liveportrait_d14_gaze_shifts.mp4 and fgnet_talking_face_franck.mp4,
 the 300-W validation split, 400 synthetic renders.)";

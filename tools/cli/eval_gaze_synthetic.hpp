@@ -7,7 +7,7 @@
 
 namespace facetrack::cli {
 
-/// `bareFaces`: renders without brows and lips (SyntheticRenderer's markings), as until session 13.
+/// `bareFaces`: renders without brows and lips (SyntheticRenderer's markings).
 void evalSyntheticGaze(int renders, const Models& models, const TrackerConfig& config, bool bareFaces = false);
 
 }  // namespace facetrack::cli

@@ -1,7 +1,7 @@
 #pragma once
 // The 68 landmarks of a face in a still image, from a box, the way users get
 // them: the whole pipeline (LBF, the landmark refiner, the fit, the CNN cascade
-// with its landmark net: docs/cnn.md), or LBF alone (issue 17: `landmarks` and
+// with its landmark net: docs/cnn.md), or LBF alone (`landmarks` and
 // `eval-landmarks` report the pipeline's by default).
 
 #include "facetrack/facetrack.hpp"

@@ -42,7 +42,7 @@ using ClassMap = cv::Mat;  // CV_8U
 class SyntheticRenderer {
 public:
     /// `markings`: brows and lips painted on the skin (false: the bare
-    /// mannequin the eye figures were measured on until session 13).
+    /// mannequin, on which the landmarks place the brows by guesswork).
     explicit SyntheticRenderer(std::shared_ptr<const FaceModel> model, bool markings = true);
     /// BGR, width x height; `classes`, when given, gets each pixel's class.
     cv::Mat render(const SyntheticFace& face, ClassMap* classes = nullptr) const;

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Which of the fit's shapes an expressions-only stage should correct (docs/cnn.md, "Session 37"): on the
+"""Which of the fit's shapes an expressions-only stage should correct (docs/decisions.md, "The fit"): on the
 300-W validation crops' unperturbed samples (make_cnn_samples --starts-from fit: the start is the fit's own
 answer), per shape, the fit's value and the corrected one (start + the net's update, mirror-averaged as the
 stage runs it, clamped to [0, 1]) against the dense teacher labels (MediaPipe's mesh fitted with the face

@@ -1,13 +1,13 @@
 #!/usr/bin/python3
-"""How far the dense teacher labels of a 300-W crop and of its mirror image disagree (docs/cnn.md, "Session 25").
+"""How far the dense teacher labels of a 300-W crop and of its mirror image disagree (docs/decisions.md, "The CNN cascade").
 
 The dense labels are MediaPipe's mesh fitted with the face model (tools/data/label_dense): another model's
 predictions, not ground truth. A photograph and its mirror image show the same head, so their labels should
 be mirror images too: R' = M R M with M = diag(-1, 1, 1) (yaw and roll change sign, pitch stays), and each
 sided shape's weight moves to its partner. Whatever differs is error of the teacher or of the labeller; of
 the two labels at least one is wrong by half the difference or more, so the difference bounds the labels'
-own error from below: how often an exact pose could be within 3 deg of them (the robustness target of
-issue 17), and how well any estimate could correlate with their expressions (the r targets of issue 16).
+own error from below: how often an exact pose could be within 3 deg of them (the pose robustness
+measure), and how well any estimate could correlate with their expressions (the r figures of docs/expressions.md).
 
 The teacher reads each crop mirrored in memory (no re-encoding), from a copy of its tool that
 `prepare` makes in build/teacher_tool with that one change (the environment variable MIRROR); `prepare`
@@ -33,7 +33,7 @@ import numpy as np
 from tools.experiments.label_pose_noise import angle_deg, rotation
 
 
-# The shapes issue 16 asks r >= 0.8 for.
+# The shapes whose agreement with the labels (r) the expression figures report.
 RELIABILITY_SHAPES = ["jawOpen", "mouthSmile_L", "mouthSmile_R", "mouthPucker", "mouthFunnel", "browInnerUp_L",
                       "browInnerUp_R", "browDown_L", "browDown_R"]
 

@@ -67,7 +67,7 @@ struct EyeModelData {
     /// them). The net's maps change more sharply from cell to cell than the
     /// forest's (their mean squared step is 1.5x the forest's on the training
     /// clips); read unsmoothed, a small face turned 20 degrees and looking down
-    /// held too small a pitch and read as a blink (docs/benchmarks.md, "Session 34").
+    /// held too small a pitch and read as a blink (docs/decisions.md, "Eyes").
     int net_map_radius = 0;
 };
 

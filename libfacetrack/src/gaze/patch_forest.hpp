@@ -38,7 +38,7 @@ struct PatchForest {
     /// The same as evaluate(patch, x, y, out), read from `padded`: the patch
     /// with at least reach() pixels repeated around it (padPatch). Why: a
     /// classifier evaluates every anchor of a patch, and no read needs its
-    /// clamp (the gaze stage about 13 % faster: docs/benchmarks.md, session 23).
+    /// clamp (the gaze stage about 13 % faster).
     void evaluatePadded(const cv::Mat& padded, int margin, int x, int y, float* out) const;
     /// The largest offset of any test, in pixels along x or y.
     int reach() const;

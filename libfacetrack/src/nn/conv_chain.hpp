@@ -3,7 +3,7 @@
 // an iris net) run with own kernels: a plain chain of convolutions, ReLUs,
 // fully connected layers and a softmax over channels, read off the net that
 // OpenCV's dnn loaded from ONNX. On the refiners they take about 0.7x of dnn's
-// time and allocate nothing per call (docs/cnn.md, "Session 31").
+// time and allocate nothing per call (docs/cnn.md, "The CNN file and the runtime").
 //
 // A convolution with stride s, dilation d and padding (p_y, p_x) computes
 //   out(y, x, o) = b_o + sum_{dy, dx, i} W(o, i, dy, dx) in(s y + d dy - p_y, s x + d dx - p_x, i)

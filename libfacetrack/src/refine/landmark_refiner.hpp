@@ -1,5 +1,5 @@
 #pragma once
-// The landmark refiner (issue 17, docs/cnn.md): a CNN that moves LBF's 68
+// The landmark refiner (docs/cnn.md): a CNN that moves LBF's 68
 // landmarks, reading the face aligned by them.
 //
 // With m_i the refiner's mean shape in patch pixels and l_i LBF's landmarks,
@@ -23,7 +23,7 @@
 // runs a second round, the patch aligned on q instead of l, and blends that
 // answer p' with l the same way (its own g). On the turned validation copies
 // at 45-60 deg of yaw that takes the error from 3.58 to 3.09 % of the box
-// (docs/cnn.md, session 22).
+// (docs/cnn.md).
 
 //
 // One side at a time (format version 6): a second net moves the brow and eye
@@ -35,8 +35,8 @@
 // (else the identity), and the net's offsets e put the points at
 // M(B (n_i + e_i) + c); each is blended with q by its own share v_i. The
 // brows and eyes are thin: a patch of one side sees them at about twice the
-// face patch's resolution (docs/cnn.md, session 28). The refine stage reads
-// both sides' patches in one call of the net (session 29).
+// face patch's resolution (docs/cnn.md). The refine stage reads
+// both sides' patches in one call of the net.
 
 #include "nn/cnn_model_data.hpp"
 #include "core/shape2d.hpp"

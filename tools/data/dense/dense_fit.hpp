@@ -1,6 +1,6 @@
 #pragma once
 // Pose, identity and every fitted expression from the teacher's dense points
-// (issue 16, step 3): the landmark fit's objective (face_fitter.hpp) over the
+// (docs/expressions.md): the landmark fit's objective (face_fitter.hpp) over the
 // N MediaPipe vertices that have a surface point on the model,
 //
 //   min  sum_i rho(|pi(R X_i(a, b) + t) - u_i|^2 / s^2) + (N / 68) (sum_j w_j b_j^2 + w_id |a|^2),   b in [0, 1],

@@ -1,4 +1,4 @@
-// label_dense: dense teacher labels (issue 16, step 3). Fits the face model's
+// label_dense: dense teacher labels (docs/expressions.md). Fits the face model's
 // pose, identity and every expression but the eyeballs' looks to MediaPipe's
 // 478-point mesh of every 300-W crop and clip frame (../shared/data/teacher,
 // another model's predictions, not ground truth), through a correspondence

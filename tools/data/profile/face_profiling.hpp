@@ -3,7 +3,7 @@
 // Solution", CVPR 2016, as 300W-LP was made for 3DDFA): the image of a face
 // turned further than it was photographed, made from the photograph and the
 // face model fitted to it, so that large-pose training and evaluation faces
-// carry their labels along (issue 17).
+// carry their labels along.
 //
 // With the fitted mesh X (identity a, expressions b) at the photographed pose
 // (R, t) and at the turned pose (R', t), each output pixel p takes the source

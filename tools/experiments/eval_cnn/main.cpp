@@ -1,4 +1,4 @@
-// eval_cnn: the CNN cascade's robustness figure (issue 17). For every 300-W
+// eval_cnn: the CNN cascade's robustness figure. For every 300-W
 // crop of a split (validation by default; never a training crop), starts
 // perturbed from its dense teacher label (MediaPipe's mesh fitted with the
 // face model: a teacher label, not ground truth) by yaw +-Y deg and scale

@@ -1,4 +1,4 @@
-// turn_scale: how far the landmark fit's yaw turns per degree of a known turn (docs/cnn.md, "Session 37").
+// turn_scale: how far the landmark fit's yaw turns per degree of a known turn (docs/fitting.md, "Turns").
 //
 //   build/tools/turn_scale [--profiled build/profiled/validation] [--labels build/dense_labels] [--faces300w DIR]
 //   build/tools/turn_scale --photographs train|validation|test [--faces300w DIR]

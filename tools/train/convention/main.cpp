@@ -1,5 +1,5 @@
 // train_convention: learns where each 300-W landmark sits on the face model
-// (issue 16, step 2). The face model's 68 landmark vertices follow another
+// (docs/expressions.md). The face model's 68 landmark vertices follow another
 // annotation convention than 300-W's annotators; the fit then explains the
 // difference with expressions (a relaxed face reads as a sneer). Fitting the
 // 300-W training faces with pose only (expressions held near 0 by a strong
@@ -7,7 +7,7 @@
 // depth, is that landmark's offset, averaged with its mirror landmark's; three
 // rounds. Jaw landmarks (0-16) slide along the silhouette and are left alone.
 //
-// With --dense-labels (label_dense's output, issue 16 step 4), also the
+// With --dense-labels (label_dense's output), also the
 // expression prior: per fitted shape f_j = s g / E[b_j^2], E over the dense
 // teacher labels of the training crops and clips (L/R averaged; g their
 // geometric mean), and the strength s the one whose fits of the 300-W

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Trains one CNN cascade stage (issue 17, docs/cnn.md): from the canonical face patch at a
+"""Trains one CNN cascade stage (docs/cnn.md): from the canonical face patch at a
 start's parameters, the update to the dense teacher label's parameters (pose about the face
 centre and 49 expressions: libfacetrack/src/cnn/update_net.hpp, written by make_cnn_samples).
 The labels are MediaPipe's predictions fitted with the face model: teacher labels, not ground truth.

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Trains the gaze stage's iris CNN (issue 15, docs/gaze.md): from the normalised 40 x 28 eye
+"""Trains the gaze stage's iris CNN (docs/gaze.md): from the normalised 40 x 28 eye
 patch, per cell of a stride-2 grid (14 x 20; cell (j, i) is patch pixel (2i, 2j)) the
 probabilities of skin, sclera and iris: the maps the MAP gaze fit reads, which the pixel
 forest gives otherwise. The patches come from `train_eyes --samples-out DIR`; their classes are

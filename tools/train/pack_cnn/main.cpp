@@ -1,5 +1,5 @@
 // pack_cnn: the CNN cascade's model file (facetrack/cnn_model.hpp) from the
-// ONNX exports of tools/train/expression/train_stage.py (issue 17, docs/cnn.md).
+// ONNX exports of tools/train/expression/train_stage.py (docs/cnn.md).
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
 //                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv | --rest-from-validation]

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Experiment (issue 17): a CNN that refines LBF's 68 landmarks from a face patch aligned by them.
+"""The landmark refiner: a CNN that refines LBF's 68 landmarks from a face patch aligned by them.
 
     /usr/bin/python3 -m tools.train.refine.train_refine --data build/refine --out build/refine/net [--minutes 60]
         [--size 96] [--widths 16,32,...] [--strides 2,2,...] [--dilations 1,1,...] [--head fc|integral] [--hidden 256] [--threads 2] [--loss smooth-l1|wing] [--resume] [--export]

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Experiment (issue 17, "a refiner per region at a higher resolution"): a CNN that refines one side's brow and
+"""A CNN that refines one side's brow and
 eye points (11 of the 68) from a small patch aligned by them, after the shipped pipeline (LBF and the landmark
 refiner). One net serves both sides: the subject's left side is mirrored into the right side's layout.
 
@@ -20,7 +20,7 @@ the pipeline's), on the sum of each set's error relative to the pipeline's; the 
 OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads) and OUT.side.txt (patch size, the
 22 mean-shape values, the 11 shares) for pack_cnn --sides.
 
---expressions CSV (session 30, tried, not shipped: docs/cnn.md): the net also reads the side's brow shapes (browDown,
+--expressions CSV (tried, not shipped: docs/decisions.md): the net also reads the side's brow shapes (browDown,
 browInnerUp, browOuterUp of that side) from label_dense's faces300w.csv, the dense teacher labels (MediaPipe's mesh
 fitted with the face model: another model's predictions, not ground truth); a turned copy carries its crop's labels.
 --init starts from a trained net (its point rows kept). The log adds each shape's Pearson r and mean absolute error on
@@ -29,7 +29,7 @@ the validation sides, and the epoch is chosen on the points' score plus the read
     /usr/bin/python3 -m tools.train.refine.train_region --out build/region/e8 --widths 8,16,32,64 --strides 2,2,2,2 --hidden 128 \
         --profiled build/profiled --minutes 15 --expressions build/dense_labels/faces300w.csv --init build/region/c8.best.pt --lr 5e-4
 
---region jaw (session 39, tried, not shipped: docs/cnn.md): the same for the jaw's sides, points 0-7 and their mirror
+--region jaw (tried, not shipped: docs/decisions.md): the same for the jaw's sides, points 0-7 and their mirror
 images 16-9 (the chin stays the landmark refiner's), with a share each for the outer (0-4) and the lower jaw (5-7); the
 patch is 0.7 of its size across the side's taller extent. Not exported: the refine stage runs the brows and eyes' net.
 """
