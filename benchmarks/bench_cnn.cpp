@@ -7,16 +7,16 @@
 
 #include "bench_support.hpp"
 
-#include "model/internals.hpp"
-#include "nn/cnn_model_data.hpp"
-#include "expression/cnn_stage.hpp"
-#include "refine/landmark_refiner.hpp"
 #include "core/image.hpp"
-#include "nn/onnx_net.hpp"
-#include "refine/refine_stage.hpp"
+#include "expression/cnn_stage.hpp"
+#include "facetrack/facetrack.hpp"
 #include "fit/fit_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
-#include "facetrack/facetrack.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "nn/onnx_net.hpp"
+#include "refine/landmark_refiner.hpp"
+#include "refine/refine_stage.hpp"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>

@@ -8,10 +8,10 @@
 
 #include "core/environment.hpp"
 #include "core/image.hpp"
+#include "facetrack/facetrack.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "gaze/gaze_stage.hpp"
 #include "model/internals.hpp"
-#include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>

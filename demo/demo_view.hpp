@@ -3,8 +3,8 @@
 // tracker's overlay (landmarks, projected mesh, head axes, gaze rays), the
 // avatar of the first face, and a HUD with fps and per-stage timings.
 
-#include "avatar_renderer.hpp"
 #include "app/overlay.hpp"
+#include "avatar_renderer.hpp"
 #include "image_quad.hpp"
 
 #include "facetrack/posed_mesh.hpp"

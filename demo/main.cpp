@@ -7,8 +7,8 @@
 #include "gl.hpp"
 
 #include "app/args.hpp"
-#include "app/media.hpp"
 #include "app/image_view.hpp"
+#include "app/media.hpp"
 #include "app/tool_main.hpp"
 #include "app/tracking_options.hpp"
 #include "facetrack/facetrack.hpp"

@@ -10,11 +10,11 @@
 // and is a finding, as is a crash or a sanitizer report.
 
 #include "core/binary_io.hpp"
-#include "nn/cnn_model_data.hpp"
-#include "model/landmark_convention.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "landmarks/lbf_model.hpp"
 #include "model/face_model_data.hpp"
+#include "model/landmark_convention.hpp"
+#include "nn/cnn_model_data.hpp"
 
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/error.hpp"

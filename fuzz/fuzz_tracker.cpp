@@ -23,11 +23,11 @@
 
 #include "fuzz_common.hpp"
 
-#include "nn/cnn_model_data.hpp"
 #include "core/binary_io.hpp"
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/tracker.hpp"
+#include "nn/cnn_model_data.hpp"
 
 #include <algorithm>
 #include <cstdint>

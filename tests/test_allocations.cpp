@@ -2,11 +2,11 @@
 // counting global operator new around Tracker::process on a real clip. Its own
 // program, so that the counting operator new sees nothing but this test.
 
+#include "facetrack/facetrack.hpp"
 #include "model/internals.hpp"
 #include "nn/cnn_model_data.hpp"
-#include "refine/landmark_refiner.hpp"
 #include "nn/patch_net.hpp"
-#include "facetrack/facetrack.hpp"
+#include "refine/landmark_refiner.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -113,13 +113,13 @@ TEST(Allocations, NonePerTrackedFrameWithTheShippedNets) {
     nn::PatchNet net(d.refiner_net, layout.size, 136, "refiner");
     cv::Mat gray, patch;
     cv::cvtColor(test::clipFrames(1)[0], gray, cv::COLOR_BGR2GRAY);
-    const landmarks::Shape68 points = (2.f * layout.mean).colwise() + Eigen::Vector2f(60.f, 40.f);
+    const core::Shape68 points = (2.f * layout.mean).colwise() + Eigen::Vector2f(60.f, 40.f);
     for (int run = 0; run < 2; ++run) {  // the first warms
         const long before = allocations.load();
         const core::Similarity toFrame = refine::patchToFrame(layout, points);
         refine::warpAligned(layout, gray, toFrame, patch);
         const long afterWarp = allocations.load();
-        const landmarks::Shape68 refined = refine::refinedLandmarks(layout, toFrame, net.predict(patch), points);
+        const core::Shape68 refined = refine::refinedLandmarks(layout, toFrame, net.predict(patch), points);
         EXPECT_TRUE(refined.allFinite());
         if (run > 0) {
             EXPECT_EQ(afterWarp - before, 0) << "the refiner's patch cut allocated";
@@ -133,7 +133,7 @@ TEST(Allocations, NonePerTrackedFrameWithTheShippedNets) {
         std::array<cv::Mat, 2> sidePatches;
         for (int run = 0; run < 2; ++run) {
             const long before = allocations.load();
-            landmarks::Shape68 refined = points;
+            core::Shape68 refined = points;
             refine::refineSides(sideLayout, sideNet, gray, sidePatches, refined);
             EXPECT_TRUE(refined.allFinite());
             if (run > 0) {

@@ -4,16 +4,10 @@
 // the cascade's file format; the landmark net's geometry; the cnn stage wired into the Tracker;
 // the landmark refiner's geometry and its refine stage.
 
-#include "model/internals.hpp"
-#include "nn/cnn_model_data.hpp"
-#include "expression/landmark_net.hpp"
-#include "refine/landmark_refiner.hpp"
-#include "refine/refine_stage.hpp"
-#include "expression/update_net.hpp"
-#include "nn/conv_chain.hpp"
 #include "core/image.hpp"
-#include "nn/onnx_net.hpp"
 #include "core/pts.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
@@ -23,6 +17,12 @@
 #include "gaze/eye_model_data.hpp"
 #include "gaze/eye_patch.hpp"
 #include "landmarks/lbf.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
+#include "nn/conv_chain.hpp"
+#include "nn/onnx_net.hpp"
+#include "refine/landmark_refiner.hpp"
+#include "refine/refine_stage.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/dnn.hpp>
@@ -597,7 +597,7 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
     placed.scale = 1.5f;
     placed.angle = 10.f * static_cast<float>(M_PI) / 180.f;
     placed.translation = Eigen::Vector2f(20.f, 12.f);
-    const landmarks::Shape68 lbf = placed.apply(layout.mean);
+    const core::Shape68 lbf = placed.apply(layout.mean);
     const core::Similarity toFrame = refine::patchToFrame(layout, lbf);
     EXPECT_NEAR(toFrame.scale, 1.5f, 1e-4f);
     EXPECT_NEAR(toFrame.angle, placed.angle, 1e-4f);
@@ -651,11 +651,11 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrus
     core::Similarity placed;  // LBF's points: the mean shape twice as large, in the frame
     placed.scale = 2.f;
     placed.translation = Eigen::Vector2f(40.f, 30.f);
-    const landmarks::Shape68 lbf = placed.apply(refine::makeRefinerLayout(m).mean);
+    const core::Shape68 lbf = placed.apply(refine::makeRefinerLayout(m).mean);
     const auto shareOfTheNet = [&](bool fresh) {
         pipeline::FaceTrack face;
         face.fresh = fresh;
-        face.result.landmarks = landmarks::toLandmarks68(lbf);
+        face.result.landmarks = core::toLandmarks68(lbf);
         EXPECT_EQ(stage->run(frame, face, state.get()), pipeline::Outcome::Ok);
         return ((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f;  // the net's shift: 3 patch px x 2
     };
@@ -676,7 +676,7 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrus
     const auto untrusting = refine::makeRefineStage(CnnModel::load(path));
     pipeline::FaceTrack face;
     face.fresh = true;
-    face.result.landmarks = landmarks::toLandmarks68(lbf);
+    face.result.landmarks = core::toLandmarks68(lbf);
     EXPECT_EQ(untrusting->run(frame, face, untrusting->newFaceState().get()), pipeline::Outcome::Ok);
     EXPECT_NEAR(((*face.result.landmarks)[0].x - lbf(0, 0)) / 6.f, 0.25f, 1e-3f);
 }
@@ -726,7 +726,7 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
         for (int x = 0; x < frame.cols; ++x) frame.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(x + y);
     cv::Mat flipped;
     cv::flip(frame, flipped, 1);
-    landmarks::Shape68 face = landmarks::Shape68::Zero();
+    core::Shape68 face = core::Shape68::Zero();
     core::Similarity right, left;  // each side's mean shape placed in the frame, turned and scaled differently
     right.scale = 1.2f, right.angle = 0.1f, right.translation = Eigen::Vector2f(10.f, 15.f);
     left.scale = 1.4f, left.angle = -0.05f, left.translation = Eigen::Vector2f(8.f, 12.f);
@@ -736,7 +736,7 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
         face.col(refine::kLeftSide[i]) = Eigen::Vector2f(99.f - leftMirrored(0, static_cast<Eigen::Index>(i)),
                                                          leftMirrored(1, static_cast<Eigen::Index>(i)));
     }
-    landmarks::Shape68 mirroredFace;
+    core::Shape68 mirroredFace;
     for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {  // the mirror image's right side is this face's left
         mirroredFace.col(refine::kRightSide[i]) = Eigen::Vector2f(99.f - face(0, refine::kLeftSide[i]), face(1, refine::kLeftSide[i]));
         mirroredFace.col(refine::kLeftSide[i]) = Eigen::Vector2f(99.f - face(0, refine::kRightSide[i]), face(1, refine::kRightSide[i]));
@@ -762,7 +762,7 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
 
     // Offsets of (+3, 0) patch pixels move the right side's points by B (3, 0) and the left side's by its mirror image.
     const Eigen::VectorXd offsets = Eigen::Vector2d(3.0, 0.0).replicate(11, 1);
-    landmarks::Shape68 moved = face;
+    core::Shape68 moved = face;
     refine::placeSide(layout, rightToFrame, offsets, false, moved);
     refine::placeSide(layout, leftToFrame, offsets, true, moved);
     const Eigen::Vector2f rightShift = right.linear() * Eigen::Vector2f(3.f, 0.f);
@@ -789,7 +789,7 @@ TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
     core::Similarity placed;
     placed.scale = 2.f;
     placed.translation = Eigen::Vector2f(40.f, 30.f);
-    landmarks::Shape68 lbf = placed.apply(refine::makeRefinerLayout(withSides(0.5f)).mean);
+    core::Shape68 lbf = placed.apply(refine::makeRefinerLayout(withSides(0.5f)).mean);
     const refine::SideLayout layout = refine::makeSideLayout(withSides(0.5f));
     for (std::size_t i = 0; i < refine::kRightSide.size(); ++i) {
         const Eigen::Vector2f p = 2.f * layout.mean.col(static_cast<Eigen::Index>(i)) + Eigen::Vector2f(20.f, 40.f);
@@ -798,9 +798,9 @@ TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
     }
     pipeline::FaceTrack face;
     face.fresh = true;
-    face.result.landmarks = landmarks::toLandmarks68(lbf);
+    face.result.landmarks = core::toLandmarks68(lbf);
     ASSERT_EQ(stage->run(frame, face, stage->newFaceState().get()), pipeline::Outcome::Ok);
-    const landmarks::Shape68 got = landmarks::fromLandmarks68(*face.result.landmarks);
+    const core::Shape68 got = core::fromLandmarks68(*face.result.landmarks);
     for (const bool mirrored : {false, true}) {
         const Eigen::Vector2f shift(mirrored ? -6.f : 6.f, 0.f);  // the net's (+3, 0) patch pixels, twice as large, mirrored
         for (const int i : mirrored ? refine::kLeftSide : refine::kRightSide) {
@@ -812,9 +812,9 @@ TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
     // A degenerate face, every point in one place: the landmarks stay finite.
     pipeline::FaceTrack collapsed;
     collapsed.fresh = true;
-    collapsed.result.landmarks = landmarks::toLandmarks68(landmarks::Shape68::Constant(80.f));
+    collapsed.result.landmarks = core::toLandmarks68(core::Shape68::Constant(80.f));
     ASSERT_EQ(stage->run(frame, collapsed, stage->newFaceState().get()), pipeline::Outcome::Ok);
-    EXPECT_TRUE(landmarks::fromLandmarks68(*collapsed.result.landmarks).allFinite());
+    EXPECT_TRUE(core::fromLandmarks68(*collapsed.result.landmarks).allFinite());
 }
 
 TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
@@ -825,10 +825,9 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     // A face for a mean shape (LBF's, 22 px wide in the patch), so that the fit after the stage still
     // holds the face: the answer is a quarter of the way from LBF's points to the net's.
     nn::CnnModelData m = refinerOnly(0.25f);
-    const landmarks::Shape68& lbfMean = model::dataOf(*plain.landmarks).mean_shape;
+    const core::Shape68& lbfMean = model::dataOf(*plain.landmarks).mean_shape;
     const float width = lbfMean.row(0).maxCoeff() - lbfMean.row(0).minCoeff();
-    const landmarks::Shape68 mean = ((lbfMean.colwise() - lbfMean.rowwise().mean()) * (22.f / width)).colwise() +
-                                    Eigen::Vector2f(15.5f, 16.f);
+    const core::Shape68 mean = ((lbfMean.colwise() - lbfMean.rowwise().mean()) * (22.f / width)).colwise() + Eigen::Vector2f(15.5f, 16.f);
     m.refiner_mean.assign(mean.data(), mean.data() + 136);
     const std::string path = test::tempPath("refiner_stage.ftm");
     nn::writeCnnModel(path, m);
@@ -857,12 +856,12 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
         tracker.process(view, 0.0, out);
         ASSERT_EQ(lbfOut.faces.size(), 1u);
         ASSERT_EQ(out.faces.size(), 1u);
-        const landmarks::Shape68 lbf = landmarks::fromLandmarks68(*lbfOut.faces[0].landmarks);
+        const core::Shape68 lbf = core::fromLandmarks68(*lbfOut.faces[0].landmarks);
         const core::Similarity toFrame = refine::patchToFrame(layout, lbf);
         const Eigen::Vector2f shift = toFrame.linear() * Eigen::Vector2f(3.f, 0.f);
-        const landmarks::Shape68 got = landmarks::fromLandmarks68(*out.faces[0].landmarks);
+        const core::Shape68 got = core::fromLandmarks68(*out.faces[0].landmarks);
         // A quarter of the way to the net's points, A (m + (3, 0)) + t, from LBF's.
-        const landmarks::Shape68 expected = 0.25f * (toFrame.apply(layout.mean).colwise() + shift) + 0.75f * lbf;
+        const core::Shape68 expected = 0.25f * (toFrame.apply(layout.mean).colwise() + shift) + 0.75f * lbf;
         EXPECT_LT((got - expected).cwiseAbs().maxCoeff(), 1e-2f);
         EXPECT_GT((got - lbf).cwiseAbs().maxCoeff(), 1.f);  // it did move them
         const auto timing = std::find_if(out.timings.begin(), out.timings.end(), [](const StageTiming& t) { return t.stage == "refine"; });
@@ -896,12 +895,12 @@ TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
         const auto found = detector->detect(core::viewOf(bgr));
         ASSERT_FALSE(found.empty()) << stem;
         cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-        const landmarks::Shape68 points = landmarks::alignFromStarts(model::dataOf(*lbf), gray,
-                                                                     landmarks::shapeFromBox(model::dataOf(*lbf), found[0].box, "yunet"),
-                                                                     TrackerConfig{}.landmark_starts);
+        const core::Shape68 points = landmarks::alignFromStarts(model::dataOf(*lbf), gray,
+                                                                landmarks::shapeFromBox(model::dataOf(*lbf), found[0].box, "yunet"),
+                                                                TrackerConfig{}.landmark_starts);
         const core::Similarity toFrame = refine::patchToFrame(layout, points);
         refine::warpAligned(layout, gray, toFrame, patch);
-        const landmarks::Shape68 refined = refine::refinedLandmarks(layout, toFrame, net.predict(patch), points);
+        const core::Shape68 refined = refine::refinedLandmarks(layout, toFrame, net.predict(patch), points);
         lbfSum += core::nme68(core::Shape2(points), truth);
         refinedSum += core::nme68(core::Shape2(refined), truth);
         ++count;

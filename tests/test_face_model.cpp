@@ -3,9 +3,9 @@
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
 #include "fit/fit_basis.hpp"
+#include "model/face_model_data.hpp"
 #include "model/internals.hpp"
 #include "model/landmark_convention.hpp"
-#include "model/face_model_data.hpp"
 #include "test_support.hpp"
 
 #include <cmath>

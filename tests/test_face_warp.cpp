@@ -1,12 +1,12 @@
 // The CNN cascade's input (src/cnn/face_warp): the face texture in canonical space.
 
-#include "model/internals.hpp"
-#include "nn/cnn_model_data.hpp"
+#include "data/profile/face_profiling.hpp"
 #include "expression/face_warp.hpp"
 #include "expression/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/face_model.hpp"
-#include "data/profile/face_profiling.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgproc.hpp>

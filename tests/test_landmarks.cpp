@@ -1,3 +1,4 @@
+#include "core/image.hpp"
 #include "core/pts.hpp"
 #include "core/shape2d.hpp"
 #include "facetrack/detector.hpp"
@@ -6,7 +7,6 @@
 #include "facetrack/tracker.hpp"
 #include "landmarks/lbf.hpp"
 #include "landmarks/lbf_trainer.hpp"
-#include "core/image.hpp"
 #include "model/internals.hpp"
 #include "test_support.hpp"
 

@@ -1,12 +1,12 @@
+#include "common/faces300w.hpp"
+#include "common/finite_result.hpp"
 #include "core/image.hpp"
 #include "core/pts.hpp"
 #include "core/shape2d.hpp"
-#include "fit/fit_basis.hpp"
-#include "landmarks/lbf.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/tracker.hpp"
-#include "common/faces300w.hpp"
-#include "common/finite_result.hpp"
+#include "fit/fit_basis.hpp"
+#include "landmarks/lbf.hpp"
 #include "test_support.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -258,7 +258,7 @@ TEST(Tracker, FollowingAStillFaceKeepsItsLandmarkAccuracy) {
             tracker.process(core::viewOf(bgr), frame / 30.0, frame == 0 ? std::vector<Box>{*box} : std::vector<Box>{}, result);
             if (frame == 0 && result.faces.empty()) break;  // not found: `first` stays above kNotFoundNme
             ASSERT_EQ(result.faces.size(), 1u) << stem << " frame " << frame;
-            const double nme = core::nme68(core::Shape2(landmarks::fromLandmarks68(*result.faces[0].landmarks)), truth);
+            const double nme = core::nme68(core::Shape2(core::fromLandmarks68(*result.faces[0].landmarks)), truth);
             (frame == 0 ? first : last) = nme;
         }
         // A face the first frame did not find (image_0016: YuNet's box spans two
@@ -312,7 +312,7 @@ TEST(Tracker, AFaceThatJumpsIsFoundWhereItWent) {
                 core::Shape2 moved = truth;
                 moved.row(0).array() += x;
                 moved.row(1).array() += 20;
-                return core::nme68(core::Shape2(landmarks::fromLandmarks68(*result.faces[0].landmarks)), moved);
+                return core::nme68(core::Shape2(core::fromLandmarks68(*result.faces[0].landmarks)), moved);
             };
             tracker.reset();
             const cv::Mat still = frameAt(20), jumped = frameAt(20 + jump);

@@ -1,7 +1,7 @@
-#include "commands.hpp"
-#include "stats.hpp"
 #include "app/media.hpp"
+#include "commands.hpp"
 #include "plot.hpp"
+#include "stats.hpp"
 
 #include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"

@@ -1,6 +1,6 @@
+#include "app/media.hpp"
 #include "commands.hpp"
 #include "json.hpp"
-#include "app/media.hpp"
 
 #include "app/image_view.hpp"
 #include "facetrack/facetrack.hpp"

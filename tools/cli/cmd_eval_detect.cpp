@@ -1,5 +1,5 @@
-#include "commands.hpp"
 #include "app/media.hpp"
+#include "commands.hpp"
 #include "common/faces300w.hpp"
 
 #include "app/image_view.hpp"

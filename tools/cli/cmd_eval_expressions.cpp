@@ -7,8 +7,8 @@
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
-#include "data/dense/label_table.hpp"
 #include "core/environment.hpp"
+#include "data/dense/label_table.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/core.hpp>

@@ -1,7 +1,7 @@
 #include "ced_plot.hpp"
 #include "commands.hpp"
-#include "json.hpp"
 #include "common/faces300w.hpp"
+#include "json.hpp"
 #include "model/internals.hpp"
 #include "stats.hpp"
 #include "still_landmarks.hpp"
@@ -154,7 +154,7 @@ Method trackedStill(std::shared_ptr<const LandmarkModel> model, int starts, int 
                                                                  landmarks::shapeFromBox(model::dataOf(*model), box, "yunet"), starts));
                     }
                 }
-                return Shape2(landmarks::fromLandmarks68(*result->faces[0].landmarks));
+                return Shape2(core::fromLandmarks68(*result->faces[0].landmarks));
             }};
 }
 
@@ -281,7 +281,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             bool lost = false;
             const Landmarks68 points = pipeline->of(bgr, gray, box, &lost);
             dropped += lost;
-            return Shape2(landmarks::fromLandmarks68(points));
+            return Shape2(core::fromLandmarks68(points));
         });
     }
     methods.push_back(ourLbf(lbf, starts));
@@ -349,7 +349,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
             followed.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
             const std::size_t bin = yawBin.value_or(0);
             ++followed.frames[bin];
-            if (face) followed.box_nmes[bin].push_back(core::nmeBox(Shape2(landmarks::fromLandmarks68(*face->landmarks)), truth));
+            if (face) followed.box_nmes[bin].push_back(core::nmeBox(Shape2(core::fromLandmarks68(*face->landmarks)), truth));
             else ++followed.without_face[bin];
             if (face && face->pose && yaw) followed.clip.push_back({face->pose->euler_deg.y, *yaw, bin});
         }

@@ -1,5 +1,5 @@
-#include "commands.hpp"
 #include "app/media.hpp"
+#include "commands.hpp"
 
 #include "app/image_view.hpp"
 #include "common/teacher.hpp"

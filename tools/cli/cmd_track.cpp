@@ -1,10 +1,10 @@
-#include "commands.hpp"
-#include "json.hpp"
 #include "app/media.hpp"
 #include "app/overlay.hpp"
+#include "commands.hpp"
+#include "json.hpp"
 
-#include "core/environment.hpp"
 #include "app/image_view.hpp"
+#include "core/environment.hpp"
 #include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgproc.hpp>

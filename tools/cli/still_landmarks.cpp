@@ -54,7 +54,7 @@ Landmarks68 StillLandmarks::of(const cv::Mat& bgr, const cv::Mat& gray, const Bo
         if (!result_.faces.empty() && result_.faces[0].landmarks) return *result_.faces[0].landmarks;
         if (dropped) *dropped = true;
     }
-    return landmarks::toLandmarks68(
+    return core::toLandmarks68(
         landmarks::alignFromStarts(model::dataOf(*lbf_), gray, landmarks::shapeFromBox(model::dataOf(*lbf_), box, box_prior_), starts_));
 }
 

@@ -57,4 +57,21 @@ float nmeBox(const Shape2& predicted, const Shape2& truth) {
     return (predicted - truth).colwise().norm().mean() / scale;
 }
 
+Landmarks68 toLandmarks68(const Shape68& shape) {
+    Landmarks68 out;
+    for (int i = 0; i < kLandmarks; ++i) out[i] = {shape(0, i), shape(1, i)};
+    return out;
+}
+
+Shape68 fromLandmarks68(const Landmarks68& points) {
+    Shape68 shape;
+    for (int i = 0; i < kLandmarks; ++i) shape.col(i) << points[i].x, points[i].y;
+    return shape;
+}
+
+Box boundsOf(const Shape68& shape) {
+    const Eigen::Vector2f lo = shape.rowwise().minCoeff(), hi = shape.rowwise().maxCoeff();
+    return {lo.x(), lo.y(), hi.x(), hi.y()};
+}
+
 }  // namespace facetrack::core

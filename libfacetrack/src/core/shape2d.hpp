@@ -13,6 +13,19 @@ namespace facetrack::core {
 
 using Shape2 = Eigen::Matrix2Xf;
 
+constexpr int kLandmarks = 68;
+
+/// A 68-point shape (iBUG order, pixels), fixed size so that per-frame work never allocates:
+/// what the landmark stages pass each other.
+using Shape68 = Eigen::Matrix<float, 2, kLandmarks>;
+
+/// The shape as the public API's landmark array, and back.
+Landmarks68 toLandmarks68(const Shape68& shape);
+Shape68 fromLandmarks68(const Landmarks68& points);
+
+/// The shape's bounding box.
+Box boundsOf(const Shape68& shape);
+
 /// x -> scale * R(angle) * x + translation.
 struct Similarity {
     float scale = 1.f;

@@ -1,12 +1,12 @@
 #include "expression/cnn_stage.hpp"
 
-#include "model/internals.hpp"
-#include "nn/cnn_model_data.hpp"
+#include "core/shape2d.hpp"
 #include "expression/landmark_net.hpp"
 #include "expression/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
-#include "landmarks/lbf.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
 
 #include <algorithm>
 #include <optional>
@@ -135,9 +135,9 @@ private:
             projectedLandmarks(landmark_basis_, s.landmark_identity_shape, frame.camera, s.params, s.landmark_slots),
             landmark_net_->predict(s.work.patch));
         if (!q.allFinite()) return;
-        const landmarks::Shape68 moved = q.cast<float>();
-        face.result.landmarks = landmarks::toLandmarks68(moved);
-        face.locate(landmarks::boundsOf(moved));
+        const core::Shape68 moved = q.cast<float>();
+        face.result.landmarks = core::toLandmarks68(moved);
+        face.locate(core::boundsOf(moved));
     }
 
     std::shared_ptr<const CnnModel> cascade_;

@@ -1,7 +1,7 @@
 #include "filter/filter_stage.hpp"
 
-#include "core/shape2d.hpp"
 #include "core/one_euro.hpp"
+#include "core/shape2d.hpp"
 #include "fit/pose.hpp"
 
 #include <algorithm>

@@ -1,10 +1,10 @@
 #include "facetrack/eye_model.hpp"
 
 #include "core/binary_io.hpp"
-#include "model/internals.hpp"
 #include "facetrack/version.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "gaze/iris_net.hpp"
+#include "model/internals.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,8 +1,8 @@
 #include "gaze/gaze_stage.hpp"
 
+#include "core/one_euro.hpp"
 #include "gaze/eye_model_data.hpp"
 #include "gaze/eye_patch.hpp"
-#include "core/one_euro.hpp"
 #include "gaze/gaze_fit.hpp"
 #include "gaze/iris_net.hpp"
 #include "model/internals.hpp"

@@ -60,11 +60,11 @@ public:
     pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState*) override {
         const LbfModel& lbf = model::dataOf(*model_);
         const Shape68 start = face.fresh || !face.next_start ? shapeFromBox(lbf, face.box, detector_kind_)
-                                                             : followingStart(lbf, fromLandmarks68(*face.next_start));
+                                                             : followingStart(lbf, core::fromLandmarks68(*face.next_start));
         const Shape68 shape = alignFromStarts(lbf, frame.gray, start, starts_);
         if (!shape.allFinite()) return pipeline::Outcome::Lost;
-        face.result.landmarks = toLandmarks68(shape);
-        face.locate(boundsOf(shape));
+        face.result.landmarks = core::toLandmarks68(shape);
+        face.locate(core::boundsOf(shape));
 
         const Box image{0.f, 0.f, static_cast<float>(frame.gray.cols - 1), static_cast<float>(frame.gray.rows - 1)};
         int outside = 0;

@@ -113,23 +113,6 @@ void checkStartCount(int starts, const std::string& what) {
     if (starts < 1 || starts > kMaxLandmarkStarts) throw Error(what + " must be in 1.." + std::to_string(kMaxLandmarkStarts));
 }
 
-Landmarks68 toLandmarks68(const Shape68& shape) {
-    Landmarks68 out;
-    for (int i = 0; i < kLandmarks; ++i) out[i] = {shape(0, i), shape(1, i)};
-    return out;
-}
-
-Shape68 fromLandmarks68(const Landmarks68& points) {
-    Shape68 shape;
-    for (int i = 0; i < kLandmarks; ++i) shape.col(i) << points[i].x, points[i].y;
-    return shape;
-}
-
-Box boundsOf(const Shape68& shape) {
-    const Eigen::Vector2f lo = shape.rowwise().minCoeff(), hi = shape.rowwise().maxCoeff();
-    return {lo.x(), lo.y(), hi.x(), hi.y()};
-}
-
 Shape68 shapeFromBox(const LbfModel& model, const Box& box, const std::string& detector) {
     const BoxPrior* prior = &model.box_priors.front();
     for (const auto& p : model.box_priors) {

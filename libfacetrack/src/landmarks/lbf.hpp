@@ -70,13 +70,6 @@ Shape68 alignFromStarts(const LbfModel& model, const cv::Mat& gray, const Shape6
 /// Throws Error "`what` must be in 1..kMaxLandmarkStarts" unless `starts` is.
 void checkStartCount(int starts, const std::string& what);
 
-/// The shape as the public API's landmark array, and back.
-Landmarks68 toLandmarks68(const Shape68& shape);
-Shape68 fromLandmarks68(const Landmarks68& points);
-
-/// The shape's bounding box.
-Box boundsOf(const Shape68& shape);
-
 /// The initial shape for a detector box: the model's box prior for that
 /// detector kind ("yunet", "cascade"), else its first prior.
 Shape68 shapeFromBox(const LbfModel& model, const Box& box, const std::string& detector);

@@ -17,6 +17,8 @@
 
 #include <Eigen/Core>
 
+#include "core/shape2d.hpp"
+
 #include <array>
 #include <cstdint>
 #include <string>
@@ -24,10 +26,9 @@
 
 namespace facetrack::landmarks {
 
-constexpr int kLandmarks = 68;
-
-/// A 68-point shape, fixed size so that per-frame work never allocates.
-using Shape68 = Eigen::Matrix<float, 2, kLandmarks>;
+// The regression works on the shared 68-point shape (core/shape2d.hpp).
+using core::kLandmarks;
+using core::Shape68;
 
 /// p = w0 a0 + w1 a1 + (1 - w0 - w1) a2, anchors indexing [landmarks..., padded hull points...].
 struct FeaturePoint {

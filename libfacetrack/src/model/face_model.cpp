@@ -2,10 +2,10 @@
 
 #include "facetrack/error.hpp"
 #include "facetrack/version.hpp"
-#include "model/landmark_convention.hpp"
 #include "model/arkit_mapping.hpp"
 #include "model/face_model_data.hpp"
 #include "model/internals.hpp"
+#include "model/landmark_convention.hpp"
 
 #include <algorithm>
 #include <filesystem>

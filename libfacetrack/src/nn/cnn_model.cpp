@@ -1,9 +1,9 @@
 #include "facetrack/cnn_model.hpp"
 
-#include "nn/cnn_model_data.hpp"
 #include "core/binary_io.hpp"
-#include "model/internals.hpp"
 #include "facetrack/version.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
 
 #include <algorithm>
 

@@ -1,8 +1,8 @@
 #include "refine/landmark_refiner.hpp"
 
-#include "nn/patch_net.hpp"
 #include "core/image.hpp"
 #include "facetrack/error.hpp"
+#include "nn/patch_net.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,19 +10,19 @@
 namespace facetrack::refine {
 
 RefinerLayout makeRefinerLayout(const nn::CnnModelData& data) {
-    if (data.refiner_mean.size() != 2 * landmarks::kLandmarks || data.refiner_share.size() != landmarks::kLandmarks) {
+    if (data.refiner_mean.size() != 2 * core::kLandmarks || data.refiner_share.size() != core::kLandmarks) {
         throw Error("landmark refiner: needs a mean shape of 68 points and 68 shares");
     }
     RefinerLayout layout;
     layout.size = data.refiner_patch_size;
-    layout.mean = Eigen::Map<const landmarks::Shape68>(data.refiner_mean.data());
+    layout.mean = Eigen::Map<const core::Shape68>(data.refiner_mean.data());
     layout.share = Eigen::Map<const Eigen::Array<float, 1, 68>>(data.refiner_share.data());
     layout.trust_from = data.refiner_trust_from;
     layout.trust_to = data.refiner_trust_to;
     return layout;
 }
 
-float netTrust(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf) {
+float netTrust(const RefinerLayout& layout, const core::Shape68& net, const core::Shape68& lbf) {
     if (!(layout.trust_to > layout.trust_from)) return 0.f;
     const Eigen::Array2f extent = lbf.rowwise().maxCoeff().array() - lbf.rowwise().minCoeff().array();
     const float size = std::sqrt(std::max(extent.x() * extent.y(), 1e-6f));
@@ -30,9 +30,7 @@ float netTrust(const RefinerLayout& layout, const landmarks::Shape68& net, const
     return std::clamp((disagreement - layout.trust_from) / (layout.trust_to - layout.trust_from), 0.f, 1.f);
 }
 
-core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shape68& lbf) {
-    return core::alignSimilarity(layout.mean, lbf);
-}
+core::Similarity patchToFrame(const RefinerLayout& layout, const core::Shape68& lbf) { return core::alignSimilarity(layout.mean, lbf); }
 
 void warpAligned(const RefinerLayout& layout, const cv::Mat& gray, const core::Similarity& toFrame, cv::Mat& patch) {
     const Eigen::Matrix2f a = toFrame.linear();
@@ -40,19 +38,18 @@ void warpAligned(const RefinerLayout& layout, const cv::Mat& gray, const core::S
     core::warpAffineGray(gray, frameOf, cv::Size(layout.size, layout.size), patch);
 }
 
-landmarks::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d) {
+core::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d) {
     return toFrame.apply(layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 68>>(d.data()).cast<float>());
 }
 
-landmarks::Shape68 blendedLandmarks(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf,
-                                    float trust) {
+core::Shape68 blendedLandmarks(const RefinerLayout& layout, const core::Shape68& net, const core::Shape68& lbf, float trust) {
     const Eigen::Array<float, 1, 68> share = layout.share + trust * (1.f - layout.share);
     return (net.array().rowwise() * share + lbf.array().rowwise() * (1.f - share)).matrix();
 }
 
-landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,
-                                    const landmarks::Shape68& lbf) {
-    const landmarks::Shape68 net = netLandmarks(layout, toFrame, d);
+core::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,
+                               const core::Shape68& lbf) {
+    const core::Shape68 net = netLandmarks(layout, toFrame, d);
     return blendedLandmarks(layout, net, lbf, netTrust(layout, net, lbf));
 }
 
@@ -67,7 +64,7 @@ SideLayout makeSideLayout(const nn::CnnModelData& data) {
     return layout;
 }
 
-SideShape sidePoints(const landmarks::Shape68& shape, bool mirrored, int width) {
+SideShape sidePoints(const core::Shape68& shape, bool mirrored, int width) {
     const auto& index = mirrored ? kLeftSide : kRightSide;
     SideShape side;
     for (std::size_t i = 0; i < index.size(); ++i) side.col(static_cast<Eigen::Index>(i)) = shape.col(index[i]);
@@ -88,7 +85,7 @@ void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& 
 }
 
 void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored,
-               landmarks::Shape68& shape) {
+               core::Shape68& shape) {
     const auto& index = mirrored ? kLeftSide : kRightSide;
     const SideShape patch = layout.mean + Eigen::Map<const Eigen::Matrix<double, 2, 11>>(e.data()).cast<float>();
     for (std::size_t i = 0; i < index.size(); ++i) {
@@ -101,8 +98,7 @@ void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen
     }
 }
 
-void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches,
-                 landmarks::Shape68& shape) {
+void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, core::Shape68& shape) {
     const int width = gray.cols;
     std::array<cv::Matx23d, 2> toFrame;
     for (const int b : {0, 1}) {  // the right side, then the left mirrored
@@ -112,7 +108,7 @@ void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gra
     const Eigen::VectorXd& e = net.predict(patches);
     const int n = net.outputCount();
     for (const int b : {0, 1}) {
-        landmarks::Shape68 placed = shape;
+        core::Shape68 placed = shape;
         placeSide(layout, toFrame[b], e.segment(b * n, n), b == 1, placed);
         if (placed.allFinite()) shape = placed;
     }

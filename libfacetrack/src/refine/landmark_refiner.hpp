@@ -38,9 +38,8 @@
 // face patch's resolution (docs/cnn.md). The refine stage reads
 // both sides' patches in one call of the net.
 
-#include "nn/cnn_model_data.hpp"
 #include "core/shape2d.hpp"
-#include "landmarks/lbf_model.hpp"
+#include "nn/cnn_model_data.hpp"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -56,7 +55,7 @@ namespace facetrack::refine {
 
 struct RefinerLayout {
     int size = 0;                            ///< the patch's side, pixels
-    landmarks::Shape68 mean;                 ///< m above
+    core::Shape68 mean;                      ///< m above
     Eigen::Array<float, 1, 68> share;        ///< w above
     float trust_from = 0.f, trust_to = 0.f;  ///< D0, D1 above
 };
@@ -65,19 +64,19 @@ struct RefinerLayout {
 RefinerLayout makeRefinerLayout(const nn::CnnModelData& data);
 
 /// g above: how far the net alone is trusted, in [0, 1].
-float netTrust(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf);
+float netTrust(const RefinerLayout& layout, const core::Shape68& net, const core::Shape68& lbf);
 
 /// x -> A x + t above, patch pixels to frame pixels.
-core::Similarity patchToFrame(const RefinerLayout& layout, const landmarks::Shape68& lbf);
+core::Similarity patchToFrame(const RefinerLayout& layout, const core::Shape68& lbf);
 
 /// P above, into `patch` (8-bit grey, size x size; reused).
 void warpAligned(const RefinerLayout& layout, const cv::Mat& gray, const core::Similarity& toFrame, cv::Mat& patch);
 
 /// The net's points p above from its outputs d.
-landmarks::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d);
+core::Shape68 netLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d);
 
 /// q above, with the trust g.
-landmarks::Shape68 blendedLandmarks(const RefinerLayout& layout, const landmarks::Shape68& net, const landmarks::Shape68& lbf, float trust);
+core::Shape68 blendedLandmarks(const RefinerLayout& layout, const core::Shape68& net, const core::Shape68& lbf, float trust);
 
 /// One side's brow and eye points, the subject's right side: its brow, then its eye.
 constexpr std::array<int, 11> kRightSide = {17, 18, 19, 20, 21, 36, 37, 38, 39, 40, 41};
@@ -96,7 +95,7 @@ SideLayout makeSideLayout(const nn::CnnModelData& data);
 
 /// One side of `shape` in its patch's frame: `mirrored` (the left side) mirrors x in a frame
 /// `width` pixels wide.
-SideShape sidePoints(const landmarks::Shape68& shape, bool mirrored, int width);
+SideShape sidePoints(const core::Shape68& shape, bool mirrored, int width);
 
 /// The 2 x 3 map from patch pixels to frame pixels, M(B u + c) above.
 cv::Matx23d sidePatchToFrame(const SideLayout& layout, const SideShape& side, bool mirrored, int width);
@@ -107,16 +106,15 @@ void warpSide(const SideLayout& layout, const cv::Mat& gray, const cv::Matx23d& 
 /// `shape` with one side's 11 points moved to the net's outputs e (22 values: x_0, y_0, ...),
 /// blended by the shares.
 void placeSide(const SideLayout& layout, const cv::Matx23d& toFrame, const Eigen::Ref<const Eigen::VectorXd>& e, bool mirrored,
-               landmarks::Shape68& shape);
+               core::Shape68& shape);
 
 /// Both sides of `shape` moved by the side net `net` (batch 2) in one call: each side's patch
 /// (warpSide) into `patches` (reused), the net's answers placed (placeSide). A side whose
 /// answer is not finite keeps its points.
-void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches,
-                 landmarks::Shape68& shape);
+void refineSides(const SideLayout& layout, nn::PatchNet& net, const cv::Mat& gray, std::array<cv::Mat, 2>& patches, core::Shape68& shape);
 
 /// q above from the net's outputs d, g from this face alone (a still image).
-landmarks::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,
-                                    const landmarks::Shape68& lbf);
+core::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similarity& toFrame, const Eigen::VectorXd& d,
+                               const core::Shape68& lbf);
 
 }  // namespace facetrack::refine

@@ -1,10 +1,10 @@
 #include "refine/refine_stage.hpp"
 
+#include "core/shape2d.hpp"
 #include "model/internals.hpp"
 #include "nn/cnn_model_data.hpp"
-#include "refine/landmark_refiner.hpp"
 #include "nn/patch_net.hpp"
-#include "landmarks/lbf.hpp"
+#include "refine/landmark_refiner.hpp"
 
 #include <array>
 #include <optional>
@@ -26,8 +26,7 @@ public:
     explicit RefineStage(std::shared_ptr<const CnnModel> model)
         : model_(std::move(model)),
           layout_(makeRefinerLayout(model::dataOf(*model_))),
-          net_(model::dataOf(*model_).refiner_net, layout_.size, 2 * landmarks::kLandmarks,
-               "landmark refiner '" + model_->sourcePath() + "'") {
+          net_(model::dataOf(*model_).refiner_net, layout_.size, 2 * core::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {
         if (!model::dataOf(*model_).side_net.empty()) {
             side_layout_ = makeSideLayout(model::dataOf(*model_));
             side_net_.emplace(model::dataOf(*model_).side_net, side_layout_.size, 2 * static_cast<int>(kRightSide.size()),
@@ -53,23 +52,23 @@ public:
 
     pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         if (!face.result.landmarks) return pipeline::Outcome::Ok;
-        const landmarks::Shape68 lbf = landmarks::fromLandmarks68(*face.result.landmarks);
+        const core::Shape68 lbf = core::fromLandmarks68(*face.result.landmarks);
         float& trust = static_cast<RefineFaceState&>(*state).trust;
         const float previous = trust;
-        landmarks::Shape68 refined = lbf;
+        core::Shape68 refined = lbf;
         // Round 2 only where the net is trusted beyond its share: there LBF's points, which aligned the patch, are in doubt.
         for (int round = 0; round < kMaxRounds && (round == 0 || trust > 0.f); ++round) {
             const core::Similarity toFrame = patchToFrame(layout_, refined);
             warpAligned(layout_, frame.gray, toFrame, patch_);
-            const landmarks::Shape68 net = netLandmarks(layout_, toFrame, net_.predict(patch_));
+            const core::Shape68 net = netLandmarks(layout_, toFrame, net_.predict(patch_));
             if (!net.allFinite()) break;
             const float now = netTrust(layout_, net, lbf);
             trust = face.fresh ? now : 0.5f * (now + previous);
             refined = blendedLandmarks(layout_, net, lbf, trust);
         }
         if (side_net_ && refined.allFinite()) refineSides(side_layout_, *side_net_, frame.gray, side_patches_, refined);
-        face.result.landmarks = landmarks::toLandmarks68(refined);
-        face.locate(landmarks::boundsOf(refined));
+        face.result.landmarks = core::toLandmarks68(refined);
+        face.locate(core::boundsOf(refined));
         return pipeline::Outcome::Ok;
     }
 

@@ -13,9 +13,9 @@
 // points cannot tell apart from the pose or the observed ones: the prior
 // keeps those near 0 instead of letting them explain the teacher's noise.
 
+#include "core/camera.hpp"
 #include "data/dense/correspondence.hpp"
 #include "data/dense/mediapipe_mesh.hpp"
-#include "core/camera.hpp"
 #include "fit/face_fitter.hpp"
 #include "fit/fit_basis.hpp"
 #include "fit/pose.hpp"

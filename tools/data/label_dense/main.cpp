@@ -19,10 +19,10 @@
 #include "data/dense/correspondence.hpp"
 #include "data/dense/dense_fit.hpp"
 #include "data/dense/mediapipe_mesh.hpp"
+#include "facetrack/face_model.hpp"
 #include "fit/face_fitter.hpp"
 #include "model/internals.hpp"
 #include "model/landmark_convention.hpp"
-#include "facetrack/face_model.hpp"
 
 #include <nlohmann/json.hpp>
 

@@ -38,18 +38,18 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
-#include "expression/landmark_net.hpp"
-#include "expression/update_net.hpp"
 #include "common/faces300w.hpp"
 #include "common/npy_writer.hpp"
 #include "core/pts.hpp"
 #include "data/dense/dense_fit.hpp"
 #include "data/dense/label_table.hpp"
+#include "data/profile/face_profiling.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/tracker.hpp"
 #include "model/internals.hpp"
-#include "data/profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>

@@ -26,14 +26,14 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
-#include "expression/face_warp.hpp"
-#include "expression/landmark_net.hpp"
 #include "common/faces300w.hpp"
 #include "core/pts.hpp"
 #include "data/dense/label_table.hpp"
+#include "data/profile/face_profiling.hpp"
+#include "expression/face_warp.hpp"
+#include "expression/landmark_net.hpp"
 #include "facetrack/face_model.hpp"
 #include "model/internals.hpp"
-#include "data/profile/face_profiling.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 

@@ -21,9 +21,9 @@
 // that was hidden; turning it back across the front reveals its far side,
 // mostly holes.
 
+#include "core/camera.hpp"
 #include "expression/face_warp.hpp"
 #include "facetrack/face_model.hpp"
-#include "core/camera.hpp"
 #include "fit/face_fitter.hpp"
 #include "fit/pose.hpp"
 

@@ -35,22 +35,22 @@
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
 #include "cli/stats.hpp"
-#include "model/internals.hpp"
-#include "nn/cnn_model_data.hpp"
-#include "facetrack/detector.hpp"
-#include "expression/landmark_net.hpp"
-#include "expression/update_net.hpp"
 #include "common/faces300w.hpp"
 #include "core/pts.hpp"
 #include "core/shape2d.hpp"
-#include "landmarks/lbf.hpp"
 #include "data/dense/dense_fit.hpp"
 #include "data/dense/label_table.hpp"
+#include "data/profile/face_profiling.hpp"
+#include "expression/landmark_net.hpp"
+#include "expression/update_net.hpp"
 #include "facetrack/cnn_model.hpp"
+#include "facetrack/detector.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/tracker.hpp"
 #include "fit/face_fitter.hpp"
-#include "data/profile/face_profiling.hpp"
+#include "landmarks/lbf.hpp"
+#include "model/internals.hpp"
+#include "nn/cnn_model_data.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -448,7 +448,7 @@ int run(int argc, char** argv) {
         // One image: `starts` perturbed starts, and the tracker's LBF + fit, each through the cascade.
         const auto landmarkErrors = [&](const cv::Mat& image, const Box& box, const fit::Landmarks2d& points, LandmarkErrors& ofLbf,
                                         LandmarkErrors& ofFull) {
-            const auto shape = [](const Landmarks68& l) { return core::Shape2(landmarks::fromLandmarks68(l)); };
+            const auto shape = [](const Landmarks68& l) { return core::Shape2(core::fromLandmarks68(l)); };
             const core::Shape2 truthShape = points.cast<float>();
             const core::Shape2 fromLbf = shape(*result.faces[0].landmarks);
             full->reset();

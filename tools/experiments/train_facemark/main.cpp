@@ -5,8 +5,8 @@
 //
 //   train_facemark [--data ../shared/data/faces300w] [--out facemark_lbf.yaml]
 
-#include "app/tool_main.hpp"
 #include "app/args.hpp"
+#include "app/tool_main.hpp"
 #include "common/faces300w.hpp"
 #include "core/environment.hpp"
 #include "core/image.hpp"

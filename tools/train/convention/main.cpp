@@ -23,13 +23,13 @@
 #include "common/faces300w.hpp"
 #include "data/dense/label_table.hpp"
 
-#include "core/pts.hpp"
 #include "core/camera.hpp"
+#include "core/pts.hpp"
+#include "facetrack/facetrack.hpp"
 #include "fit/face_fitter.hpp"
 #include "fit/fit_basis.hpp"
 #include "model/internals.hpp"
 #include "model/landmark_convention.hpp"
-#include "facetrack/facetrack.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 

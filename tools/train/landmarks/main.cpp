@@ -7,8 +7,8 @@
 // Long: run it under nohup (docs/landmarks.md). After each stage it writes
 // OUT.partial; --resume continues from there. Deterministic for a given seed.
 
-#include "app/tool_main.hpp"
 #include "app/args.hpp"
+#include "app/tool_main.hpp"
 #include "common/faces300w.hpp"
 #include "core/environment.hpp"
 #include "core/image.hpp"
@@ -36,7 +36,7 @@ namespace fs = std::filesystem;
 namespace facetrack::tools {
 namespace {
 
-using landmarks::Shape68;
+using core::Shape68;
 
 const auto kStart = std::chrono::steady_clock::now();
 
@@ -70,7 +70,7 @@ struct Variant {
 };
 
 Shape68 toShape68(const core::Shape2& s) {
-    if (s.cols() != landmarks::kLandmarks) throw Error("expected 68 points");
+    if (s.cols() != core::kLandmarks) throw Error("expected 68 points");
     return s;
 }
 
@@ -78,7 +78,7 @@ std::vector<Variant> makeVariants(const cv::Mat& bgr, const Shape68& truth, std:
     cv::Mat mirrored;
     cv::flip(bgr, mirrored, 1);
     Shape68 mirroredTruth;
-    for (int i = 0; i < landmarks::kLandmarks; ++i) {
+    for (int i = 0; i < core::kLandmarks; ++i) {
         mirroredTruth.col(kMirror68[i]) = Eigen::Vector2f(bgr.cols - 1 - truth(0, i), truth(1, i));
     }
     std::vector<Variant> out = {{bgr, truth, true}, {mirrored, mirroredTruth, false}};
@@ -259,7 +259,7 @@ int run(int argc, char** argv) {
                     const Eigen::Vector2f c = images[i].truth.rowwise().mean();
                     s.translation = c - s.linear() * c + 0.03f * box.width() * Eigen::Vector2f(normal(rng), normal(rng));
                     shape = s.apply(images[i].truth);
-                    for (int p = 0; p < landmarks::kLandmarks; ++p) {
+                    for (int p = 0; p < core::kLandmarks; ++p) {
                         shape.col(p) += 0.01f * box.width() * Eigen::Vector2f(normal(rng), normal(rng));
                     }
                 }

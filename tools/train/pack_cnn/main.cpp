@@ -40,13 +40,13 @@
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
-#include "data/dense/label_table.hpp"
-#include "nn/cnn_model_data.hpp"
 #include "core/binary_io.hpp"
+#include "data/dense/label_table.hpp"
 #include "expression/landmark_net.hpp"
 #include "expression/update_net.hpp"
 #include "facetrack/face_model.hpp"
 #include "fit/fit_basis.hpp"
+#include "nn/cnn_model_data.hpp"
 
 #include <algorithm>
 #include <cmath>
