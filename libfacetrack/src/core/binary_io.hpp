@@ -116,4 +116,26 @@ std::string readModelFile(const std::string& path, std::string_view magic, std::
 std::string readModelFile(const std::string& path, std::string_view magic, std::uint32_t oldest, std::uint32_t newest,
                           const std::string& kind, std::uint32_t& fileVersion);
 
+/// A model file opened for reading, the one way every model reader starts:
+/// the container checked (readModelFile), the version it was written in, and a
+/// reader over its payload whose errors name the file as "kind 'path'".
+class ModelFileReader {
+public:
+    ModelFileReader(const std::string& path, std::string_view magic, std::uint32_t oldest, std::uint32_t newest, const std::string& kind)
+        : payload_(readModelFile(path, magic, oldest, newest, kind, version_)), what_(kind + " '" + path + "'"), reader_(payload_, what_) {}
+    ModelFileReader(const ModelFileReader&) = delete;  // the reader views the payload
+    ModelFileReader& operator=(const ModelFileReader&) = delete;
+
+    std::uint32_t version() const { return version_; }
+    /// "kind 'path'": how errors about the file name it.
+    const std::string& what() const { return what_; }
+    BinaryReader& reader() { return reader_; }
+
+private:
+    std::uint32_t version_ = 0;
+    std::string payload_;
+    std::string what_;
+    BinaryReader reader_;
+};
+
 }  // namespace facetrack::core

@@ -71,10 +71,10 @@ void writeEyeModel(const std::string& path, const EyeModelData& m) {
 }
 
 EyeModelData readEyeModel(const std::string& path) {
-    const std::string what = "eye model '" + path + "'";
-    std::uint32_t version = 0;
-    const std::string payload = core::readModelFile(path, kEyeModelMagic, 1, kEyeModelVersion, "eye model", version);
-    core::BinaryReader r(payload, what);
+    core::ModelFileReader file(path, kEyeModelMagic, 1, kEyeModelVersion, "eye model");
+    core::BinaryReader& r = file.reader();
+    const std::uint32_t version = file.version();
+    const std::string& what = file.what();
     EyeModelData m;
     m.pixels = getForest(r);
     m.aperture = getForest(r);

@@ -99,10 +99,10 @@ void writeLbfModel(const std::string& path, const LbfModel& m) {
 }
 
 LbfModel readLbfModel(const std::string& path) {
-    const std::string what = "landmark model '" + path + "'";
-    std::uint32_t version = 0;
-    const std::string payload = core::readModelFile(path, kLbfMagic, 1, kLbfVersion, "landmark model", version);
-    core::BinaryReader r(payload, what);
+    core::ModelFileReader file(path, kLbfMagic, 1, kLbfVersion, "landmark model");
+    core::BinaryReader& r = file.reader();
+    const std::uint32_t version = file.version();
+    const std::string& what = file.what();
     LbfModel m;
     m.trees_per_landmark = r.get<std::int32_t>();
     m.tree_depth = r.get<std::int32_t>();

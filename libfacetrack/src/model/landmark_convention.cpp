@@ -29,9 +29,9 @@ void writeLandmarkConvention(const std::string& path, const LandmarkConvention& 
 }
 
 LandmarkConvention readLandmarkConvention(const std::string& path) {
-    const std::string what = "landmark convention '" + path + "'";
-    const std::string payload = core::readModelFile(path, kConventionMagic, kConventionVersion, "landmark convention");
-    core::BinaryReader r(payload, what);
+    core::ModelFileReader file(path, kConventionMagic, kConventionVersion, kConventionVersion, "landmark convention");
+    core::BinaryReader& r = file.reader();
+    const std::string& what = file.what();
     if (r.get<std::uint32_t>() != kLandmarkCount) r.fail("landmark count");
     LandmarkConvention c;
     r.getArray(c.offsets_frontal_cm.data(), static_cast<std::size_t>(c.offsets_frontal_cm.size()));

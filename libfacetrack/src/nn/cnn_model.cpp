@@ -102,10 +102,10 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
 }
 
 CnnModelData readCnnModel(const std::string& path) {
-    const std::string what = "CNN cascade '" + path + "'";
-    std::uint32_t version = 0;
-    const std::string payload = core::readModelFile(path, kCnnModelMagic, 2, kCnnModelVersion, "CNN cascade", version);
-    core::BinaryReader r(payload, what);
+    core::ModelFileReader file(path, kCnnModelMagic, 2, kCnnModelVersion, "CNN cascade");
+    core::BinaryReader& r = file.reader();
+    const std::uint32_t version = file.version();
+    const std::string& what = file.what();
     CnnModelData m;
     m.patch_size = r.get<std::int32_t>();
     const auto names = r.get<std::uint32_t>();
