@@ -43,7 +43,7 @@ const Format kFormats[] = {
     {landmarks::kLbfMagic, landmarks::kLbfVersion, [](const std::string& p) { LandmarkModel::load(p); }},
     {gaze::kEyeModelMagic, gaze::kEyeModelVersion, [](const std::string& p) { EyeModel::load(p); }},
     {model::kConventionMagic, model::kConventionVersion, [](const std::string& p) { model::readLandmarkConvention(p); }},
-    {expression::kCnnModelMagic, expression::kCnnModelVersion, [](const std::string& p) { CnnModel::load(p); }},
+    {nn::kCnnModelMagic, nn::kCnnModelVersion, [](const std::string& p) { CnnModel::load(p); }},
 };
 constexpr int kFormatCount = sizeof kFormats / sizeof kFormats[0];
 
