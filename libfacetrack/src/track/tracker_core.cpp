@@ -228,8 +228,8 @@ pipeline::Outcome TrackerCore::runStages(const pipeline::FrameInput& input, pipe
     Outcome outcome = sweep(input, face, followed);
     if (followed && (outcome == Outcome::Doubtful || outcome == Outcome::Unsettled)) {
         const Outcome again = sweep(input, face, false);
-        // The first sweep's doubt stands: the detector still checks the face.
-        outcome = again == Outcome::Lost ? again : outcome == Outcome::Doubtful ? Outcome::Doubtful : again;
+        // The first sweep's doubt stands (the detector still checks the face), unless the face is lost.
+        if (again == Outcome::Lost || outcome != Outcome::Doubtful) outcome = again;
     }
     // A face no stage could place is not followed: found again by the next search.
     return face.located ? outcome : Outcome::Lost;
