@@ -5,6 +5,10 @@
 
 namespace facetrack::neutral {
 
+namespace {
+
+/// w' = (w - w0) / (1 - w0) clamped to [0, 1] for every weight of `e` but the ones `keepArkit` /
+/// `keepNative` mark; a weight whose neutral reads 0.99 or more is left as it is. No allocation.
 void relativeToNeutral(const ExpressionResult& neutral, const std::vector<bool>& keepArkit, const std::vector<bool>& keepNative,
                        ExpressionResult& e) {
     const auto rescale = [](float w, float w0) { return w0 < 0.99f ? std::clamp((w - w0) / (1.f - w0), 0.f, 1.f) : w; };
@@ -18,8 +22,6 @@ void relativeToNeutral(const ExpressionResult& neutral, const std::vector<bool>&
         e.native[k] = rescale(e.native[k], neutral.native[k]);
     }
 }
-
-namespace {
 
 struct NeutralFaceState final : pipeline::StageState {
     std::optional<ExpressionResult> last;     ///< this frame's weights before rescaling

@@ -21,10 +21,4 @@ namespace facetrack::neutral {
 
 std::unique_ptr<pipeline::Stage> makeNeutralStage(std::shared_ptr<const FaceModel> model);
 
-/// w' = (w - w0) / (1 - w0) clamped to [0, 1] for every weight of `e` but the
-/// ones `keepArkit` / `keepNative` mark; a weight whose neutral reads 0.99 or
-/// more is left as it is. No allocation.
-void relativeToNeutral(const ExpressionResult& neutral, const std::vector<bool>& keepArkit, const std::vector<bool>& keepNative,
-                       ExpressionResult& e);
-
 }  // namespace facetrack::neutral

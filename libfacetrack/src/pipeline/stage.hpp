@@ -160,7 +160,8 @@ public:
     /// whether it can run with what it was given, and what implements it or
     /// why it cannot.
     virtual StageInfo info() const = 0;
-    /// What it reads and writes. Valid after connect().
+    /// What it reads and writes (from construction on), and the expressions
+    /// it estimates (once connected).
     virtual Contract contract() const = 0;
     /// Called once at construction, in list order, with what the available
     /// stages before it provide, when its reads are among them.
