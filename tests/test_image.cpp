@@ -6,6 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -42,6 +43,18 @@ TEST(Image, FormatsConvertToTheSameBgrAndGray) {
         cv::Mat buffer;
         EXPECT_LE(cv::norm(toGray(view, buffer), gray, cv::NORM_INF), 1.0);
     }
+}
+
+// The Tracker keeps the grey frame and passes it back as the next buffer: a grey frame
+// wrapped once must not be written into when a colour frame of the same size follows.
+TEST(Image, AColourFrameAfterAGreyOneNeverWritesIntoTheGreyFramesPixels) {
+    std::vector<std::uint8_t> grey(7 * 5, 7);
+    cv::Mat gray = toGray({grey.data(), 7, 5, 7, PixelFormat::Gray8}, gray);
+    EXPECT_EQ(gray.data, grey.data());
+    const cv::Mat bgr(5, 7, CV_8UC3, cv::Scalar(200, 200, 200));
+    gray = toGray(viewOf(bgr), gray);
+    EXPECT_EQ(std::count(grey.begin(), grey.end(), std::uint8_t{7}), 35);
+    EXPECT_EQ(gray.at<std::uint8_t>(2, 3), 200);
 }
 
 TEST(Image, StridedViewWrapsWithoutCopying) {

@@ -70,9 +70,13 @@ cv::Mat toBgr(const ImageView& view) {
 
 cv::Mat toGray(const ImageView& view, cv::Mat& gray) {
     const cv::Mat src = wrap(view);
+    if (view.format == PixelFormat::Gray8) return src;
+    // A buffer that holds an earlier grey frame's header views the caller's pixels (a Mat
+    // reuses data of the same size): converting into it would write into them.
+    if (gray.data && !gray.u) gray.release();
     switch (view.format) {
         case PixelFormat::Gray8:
-            return src;
+            break;
         case PixelFormat::Bgr8:
             cv::cvtColor(src, gray, cv::COLOR_BGR2GRAY);
             break;

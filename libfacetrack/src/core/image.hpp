@@ -15,7 +15,8 @@ cv::Mat wrap(const ImageView& view);
 cv::Mat toBgr(const ImageView& view);
 
 /// The frame as 8-bit grey: wraps when it already is, else converts into
-/// `buffer` (reused without reallocating when the size stays the same).
+/// `buffer` (reused without reallocating when the size stays the same). The
+/// result may be passed back as `buffer`: a wrapped grey frame is never written to.
 cv::Mat toGray(const ImageView& view, cv::Mat& buffer);
 
 /// A view of an 8-bit BGR or grey cv::Mat (for tools and tests).
