@@ -163,6 +163,7 @@ TEST(Allocations, NonePerTrackedFrameWithACascade) {
     cascade.expressions = {"jawOpen"};
     cascade.expressions_only = cascade.corrects_fit = cascade.mirror_averaged = false;  // the shipped expression stage's
     cascade.neutral.clear();
+    cascade.full.clear();
     cascade.reported.clear();
     cascade.stages.assign(1, {2, test::fixtureBytes("cnn_parity.onnx")});
     cascade.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");

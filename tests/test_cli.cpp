@@ -280,8 +280,14 @@ TEST(Cli, EvalExpressionsReportsNeutralAndResponsesAndRejectsBadLabels) {
     EXPECT_NE(run.out.find("neutral ("), std::string::npos) << run.out;
     EXPECT_NE(run.out.find("smile       ("), std::string::npos) << run.out;
     EXPECT_NE(run.out.find("    liveportrait_d0_greenscreen_gaze_smile 27-60: +"), std::string::npos) << run.out;  // the segment itself
+    // The blendshape teacher's reading of the same frames beside ours, and its per-frame agreement.
+    EXPECT_NE(run.out.find("the teacher's in brackets"), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("the blendshape teacher (MediaPipe's predictions, not truth)"), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("jitter on the neutral segments"), std::string::npos) << run.out;
     EXPECT_TRUE(std::filesystem::exists(plots + "_neutral.png"));
+    EXPECT_TRUE(std::filesystem::exists(plots + "_responses.png"));
     EXPECT_TRUE(std::filesystem::exists(plots + "_liveportrait_d0_greenscreen_gaze_smile.png"));
+    std::filesystem::remove(plots + "_responses.png");
     std::filesystem::remove(plots + "_neutral.png");
     std::filesystem::remove(plots + "_liveportrait_d0_greenscreen_gaze_smile.png");
     const std::string bad = test::tempPath("labels.csv");

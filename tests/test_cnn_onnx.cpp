@@ -222,6 +222,19 @@ TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
         bad.reported = reported;
         EXPECT_THROW(nn::writeCnnModel(test::tempPath("cascade_bad.ftm"), bad), Error);
     }
+    // A full-expression reading above its neutral round-trips; one at or below it, or without a neutral, is refused.
+    nn::CnnModelData scaled = reading;
+    scaled.neutral = {0.1f};
+    scaled.full = {0.6f};
+    nn::writeCnnModel(test::tempPath("cascade_scaled.ftm"), scaled);
+    EXPECT_EQ(model::dataOf(*CnnModel::load(test::tempPath("cascade_scaled.ftm"))).full, scaled.full);
+    for (const auto& [neutral, full] :
+         {std::pair<std::vector<float>, std::vector<float>>{{0.1f}, {0.1f}}, {{}, {0.6f}}, {{0.1f}, {1.5f}}}) {
+        nn::CnnModelData bad = reading;
+        bad.neutral = neutral;
+        bad.full = full;
+        EXPECT_THROW(nn::writeCnnModel(test::tempPath("cascade_bad.ftm"), bad), Error);
+    }
     nn::CnnModelData withLandmarks = m;
     withLandmarks.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     nn::writeCnnModel(test::tempPath("cascade_landmarks.ftm"), withLandmarks);
@@ -411,8 +424,9 @@ TEST(CnnStage, RefinesTheFitsPoseAndExpressionsInTheTracker) {
 // A cascade that reads expressions keeps the fit's pose and the shapes the fit estimates, and adds
 // the others. The fixture net's update is constant: no pose change, +0.3 on its one expression,
 // named as a shape the fit does not estimate (browDown_L: it reads 0.3; with a neutral of 0.1,
-// (0.3 - 0.1) / 0.9; not reported: 0), or as one it does (jawOpen: the stage writes nothing, or,
-// correcting the fit, the fit's value + 0.3 whatever the neutral).
+// (0.3 - 0.1) / 0.9, and with a full-expression reading of 0.5 too, (0.3 - 0.1) / (0.5 - 0.1); not
+// reported: 0), or as one it does (jawOpen: the stage writes nothing, or, correcting the fit, the
+// fit's value + 0.3, rescaled by the neutral like every shape it reports).
 TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
     FACETRACK_REQUIRE_SHARED();
     Models models = fitOnly();
@@ -428,10 +442,12 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
         std::vector<bool> reported;
         float browDownLeft;  ///< what the stage reports; negative: the fit's own value
         bool correctsFit = false;
+        std::vector<float> full = {};
     };
     for (const Case& c :
          {Case{"browDown_L", {}, {}, 0.3f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f}, Case{"browDown_L", {}, {false}, -1.f},
-          Case{"jawOpen", {}, {}, -1.f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f, true}, Case{"jawOpen", {0.1f}, {}, -1.f, true}}) {
+          Case{"jawOpen", {}, {}, -1.f}, Case{"browDown_L", {0.1f}, {}, 0.2f / 0.9f, true}, Case{"jawOpen", {0.1f}, {}, -1.f, true},
+          Case{"browDown_L", {0.1f}, {}, 0.2f / 0.4f, true, {0.5f}}}) {
         nn::CnnModelData m;
         m.expressions = {c.shape};
         m.stages.push_back({1, test::fixtureBytes("cnn_expression_fixture.onnx")});
@@ -439,6 +455,7 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
         m.corrects_fit = c.correctsFit;
         m.neutral = c.neutral;
         m.reported = c.reported;
+        m.full = c.full;
         const std::string path = test::tempPath("cascade_reads_" + c.shape + ".ftm");
         nn::writeCnnModel(path, m);
         models.cnn = CnnModel::load(path);
@@ -462,7 +479,7 @@ TEST(CnnStage, AnExpressionsOnlyCascadeKeepsTheFitsPoseAndShapes) {
             for (std::size_t k = 0; k < wa.size(); ++k) {
                 const bool read = arkitNames()[k] == "browDownLeft" && c.browDownLeft >= 0.f;
                 if (corrected && arkitNames()[k] == "jawOpen") {
-                    EXPECT_NEAR(wb[k], std::min(1.f, wa[k] + 0.3f), 1e-5f) << "frame " << i;
+                    EXPECT_NEAR(wb[k], std::clamp((wa[k] + 0.3f - 0.1f) / 0.9f, 0.f, 1.f), 1e-5f) << "frame " << i;
                     continue;
                 }
                 EXPECT_NEAR(wb[k], read ? c.browDownLeft : wa[k], read ? 1e-5f : 0.f)

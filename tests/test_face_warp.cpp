@@ -11,6 +11,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <filesystem>
+#include <fstream>
+
 namespace facetrack {
 namespace {
 
@@ -182,7 +185,8 @@ TEST(FaceProfiling, ExpressionCopiesMoveOneGroupOfShapesAndCarryTheTextureWithTh
     label.expression << 0.1, 0.1, 0.0, 0.0, 0.2, 0.2, 0.0, 0.3;
     const std::vector<float> identity(static_cast<std::size_t>(s.model->identityCount()), 0.f);
     std::mt19937 rng(5);
-    const auto copies = profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 12, rng);
+    const auto copies = profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 12, rng,
+                                                  {"brows_down", "inner_brows_up", "brows_up", "pucker"});
     ASSERT_EQ(copies.size(), 12u);  // a frontal face hides nothing when its brows or lips move
     const std::vector<std::vector<int>> groups = {{0, 1}, {2, 3}, {2, 3, 4, 5}, {6}};  // positions in `names`
     const auto photographedMesh = s.model->vertices(identity, profile::nativeWeights(*s.model, ids, label.expression));
@@ -233,6 +237,63 @@ TEST(FaceProfiling, ExpressionCopiesMoveOneGroupOfShapesAndCarryTheTextureWithTh
         EXPECT_EQ(copy.label.expression.tail(6), label.expression.tail(6));
     }
     EXPECT_THROW(profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 1, rng, {"brows_sideways"}), Error);
+}
+
+TEST(FaceProfiling, ExpressionWarpingRaisesEveryShapeButThoseThatOpenTheMouthAndTakesCapturedFaces) {
+    const auto& s = scene();
+    const cv::Mat photo = smoothTexture(640, 480, 9);
+    const std::vector<std::string> groups = profile::expressionCopyGroups(*s.model);
+    for (const char* group : {"mouthFrown", "mouthFrown_L", "cheekPuff", "noseSneer_R", "jawLeft", "mouthPress", "pucker"})
+        EXPECT_NE(std::find(groups.begin(), groups.end(), group), groups.end()) << group;
+    for (const char* kept : {"jawOpen", "mouthUpperUp", "eyeLookUp_L", "eyeBlink"})
+        EXPECT_EQ(std::find(groups.begin(), groups.end(), kept), groups.end()) << kept;
+
+    const std::vector<std::string> names = {"mouthFrown_L", "mouthFrown_R", "jawOpen", "mouthPucker"};
+    const std::vector<int> ids = nn::expressionIndices(s.model->expressionNames(), names);
+    fit::FaceParams label = faceAt({0.0, 0.0, 0.0}, {0.0, 0.0, 50.0}, static_cast<Eigen::Index>(ids.size()));
+    label.expression << 0.0, 0.0, 0.2, 0.0;
+    const std::vector<float> identity(static_cast<std::size_t>(s.model->identityCount()), 0.f);
+    std::mt19937 rng(3);
+    // A pair's stem moves both sides alike, one side's name that side only.
+    for (const auto& copy : profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 3, rng, {"mouthFrown"}))
+        EXPECT_EQ(copy.label.expression[0], copy.label.expression[1]);
+    for (const auto& copy : profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 3, rng, {"mouthFrown_L"}))
+        EXPECT_EQ(copy.label.expression[1], 0.0);
+    // A captured face replaces the photograph's weights, but the mouth opens no further than photographed.
+    std::vector<float> captured(s.model->expressionNames().size(), 0.f);
+    for (const int id : ids) captured[static_cast<std::size_t>(id)] = 0.7f;
+    const auto copies = profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 2, rng, {"captured"}, {captured});
+    ASSERT_EQ(copies.size(), 2u);
+    for (const auto& copy : copies) {
+        EXPECT_NEAR(copy.label.expression[0], 0.7, 1e-6);
+        EXPECT_NEAR(copy.label.expression[3], 0.7, 1e-6);
+        EXPECT_NEAR(copy.label.expression[2], 0.2, 1e-6);  // jawOpen kept at the photograph's
+        cv::Mat difference;
+        cv::absdiff(copy.image, photo, difference);
+        EXPECT_GT(cv::mean(difference)[0], 0.1);  // the mouth moved
+    }
+    EXPECT_THROW(profile::expressionCopies(*s.model, photo, s.camera, identity, ids, label, 1, rng, {"captured"}), Error);
+}
+
+TEST(FaceProfiling, ReadsArkitCapturesIntoTheFaceModelsOrder) {
+    const auto& s = scene();
+    const std::string dir = test::tempPath("arkit");
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/take.csv") << "Timecode,BlendShapeCount,MouthSmileLeft,JawOpen,TongueOut\n"
+                                        "00:00:00:01.000,3,0.5,0.25,1.0\n00:00:00:02.000,3,1.5,0.0,0.0\n00:00:00:03.000,3,0.1\n";
+    const auto faces = profile::readArkitCaptures(*s.model, dir);
+    ASSERT_EQ(faces.size(), 2u);  // the cut last line is left out
+    const auto& names = s.model->expressionNames();
+    const auto at = [&](const std::string& n) {
+        return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin());
+    };
+    EXPECT_FLOAT_EQ(faces[0][at("mouthSmile_L")], 0.5f);
+    EXPECT_FLOAT_EQ(faces[0][at("jawOpen")], 0.25f);
+    EXPECT_FLOAT_EQ(faces[0][at("mouthSmile_R")], 0.f);
+    EXPECT_FLOAT_EQ(faces[1][at("mouthSmile_L")], 1.f);  // clamped to [0, 1]
+    EXPECT_EQ(profile::readArkitCaptures(*s.model, dir, 2).size(), 1u);
+    std::filesystem::remove_all(dir);
+    EXPECT_THROW(profile::readArkitCaptures(*s.model, dir), std::exception);
 }
 
 TEST(FaceProfiling, TurnSequenceGoesOutByTheStepAndComesBack) {

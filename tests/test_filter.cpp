@@ -42,6 +42,27 @@ TEST(OneEuroFilter, SmoothsNoiseAtRestAndFollowsFastMotionWithLittleLag) {
     EXPECT_LT(lagAfter(5.0), 0.5 * lagAfter(0.0));
 }
 
+TEST(OneEuroFilter, APerElementCutoffScaleHoldsSomeElementsSteadierThanOthers) {
+    std::mt19937 rng(8);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    core::OneEuroFilter f({1.0, 0.0, 1.0});
+    f.setMinCutoffScale(Eigen::Vector3d(0.5, 1.0, 2.0));
+    Eigen::Vector3d outSq = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 600; ++i) {
+        const Eigen::VectorXd y = f(Eigen::Vector3d::Constant(noise(rng)), 1.0 / 30);  // the same noise in all three
+        if (i > 30) outSq += y.cwiseAbs2();
+    }
+    EXPECT_LT(outSq[0], 0.8 * outSq[1]);  // a lower cutoff lets less noise through
+    EXPECT_LT(outSq[1], 0.8 * outSq[2]);
+    // A scale of another size than the samples' is ignored: every element as set.
+    core::OneEuroFilter plain({1.0, 0.0, 1.0}), mismatched({1.0, 0.0, 1.0});
+    mismatched.setMinCutoffScale(Eigen::Vector2d(0.5, 0.5));
+    for (int i = 0; i < 20; ++i) {
+        const Eigen::VectorXd x = Eigen::Vector3d::Constant(noise(rng));
+        EXPECT_EQ(plain(x, 1.0 / 30), mismatched(x, 1.0 / 30));
+    }
+}
+
 TEST(OneEuroFilter, RestartsOnResetOrBadTime) {
     core::OneEuroFilter f;
     f(Eigen::VectorXd::Zero(2), 0.1);

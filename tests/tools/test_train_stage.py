@@ -32,5 +32,41 @@ class RestLevels(unittest.TestCase):
         self.assertEqual(levels["mouthPucker"], 0.0)
 
 
+class Gains(unittest.TestCase):
+    def test_the_factor_that_brings_readings_above_their_rest_level_to_the_labels(self):
+        labels = torch.linspace(0, 1, 101).unsqueeze(1)
+        estimate = 0.1 + 0.45 * labels                                # rest 0.1, half the size above it
+        mask = torch.ones_like(labels)
+        gains = train_stage.gains(estimate, labels, mask, {"mouthPucker": 0.1}, ["mouthPucker"])
+        self.assertAlmostEqual(gains["mouthPucker"], 2.0, places=4)   # (w - 0.1) / 0.9 = labels / 2
+
+    def test_a_gain_is_clamped_and_1_where_few_frames_show_the_shape(self):
+        labels = torch.linspace(0, 1, 101).unsqueeze(1)
+        mask = torch.ones_like(labels)
+        tiny = train_stage.gains(0.01 * labels, labels, mask, {"x": 0.0}, ["x"])
+        self.assertEqual(tiny["x"], train_stage.MAX_GAIN)
+        rare = torch.zeros(101, 1)
+        rare[:5] = 1.0                                                # five frames show it: too few to tell
+        self.assertEqual(train_stage.gains(0.5 * rare, rare, mask, {"x": 0.0}, ["x"])["x"], 1.0)
+        self.assertEqual(train_stage.gains(2.0 * labels, labels, mask, {"x": 0.0}, ["x"])["x"], 1.0)  # never below 1
+
+    def test_unlabelled_samples_count_for_neither_gain_nor_agreement(self):
+        labels = torch.linspace(0, 1, 101).unsqueeze(1)
+        estimate = 0.5 * labels
+        mask = torch.ones_like(labels)
+        estimate[::2] = 1.0 - labels[::2]                             # nonsense where there is no label
+        mask[::2] = 0.0
+        self.assertAlmostEqual(train_stage.gains(estimate, labels, mask, {"x": 0.0}, ["x"])["x"], 2.0, places=4)
+        self.assertAlmostEqual(train_stage.masked_agreement(estimate, labels, mask, ["x"])["x"], 1.0, places=5)
+
+
+class Names(unittest.TestCase):
+    def test_face_model_names_and_their_mirrors(self):
+        self.assertEqual(train_stage.arkit_name("browDown_L"), "browDownLeft")
+        self.assertEqual(train_stage.arkit_name("jawOpen"), "jawOpen")
+        self.assertEqual(train_stage.mirror_name("mouthSmileLeft"), "mouthSmileRight")
+        self.assertEqual(train_stage.mirror_name("browDown_R"), "browDown_L")
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -7,6 +7,7 @@
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
+#include "common/clip_splits.hpp"
 #include "core/environment.hpp"
 #include "data/dense/label_table.hpp"
 #include "facetrack/facetrack.hpp"
@@ -30,20 +31,26 @@ namespace facetrack::cli {
 
 namespace {
 
-const char* kUsage = R"(usage: facetrack eval-expressions [CLIP...] [--labels CSV] [--plot PREFIX] [--no-mirror] [--calibrate-neutral]
-                                 [--dense CLIPS_CSV] [tracker options]
+const char* kUsage = R"(usage: facetrack eval-expressions [CLIP...] [--held-out] [--labels CSV] [--plot PREFIX] [--no-mirror]
+                                 [--calibrate-neutral] [--dense CLIPS_CSV] [--no-teacher] [tracker options]
 The ARKit-52 weights on hand-labelled segments (default data/expression_labels.csv, clips from
-../shared/data/clips; with no CLIP, every clip the labels name):
+../shared/data/clips; with no CLIP, every clip the labels name; --held-out: only the clips of the
+people data/clip_splits.csv holds out of all training, beside the labels):
   neutral   per shape, the mean over neutral segments (eyeLook shapes excluded from the worst)
   response  per labelled expression, the mean of its shapes minus their neutral mean; then the
-            same for each of its segments
+            same for each of its segments; beside each, the blendshape teacher's on the same frames
   mirror    mean |left shape (image) - right shape (mirrored image)| over all frames
   yaw       the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg), the largest change
             (eyeLook excluded: a turned head's eyes turn back to the camera)
+  teacher   MediaPipe Face Landmarker's blendshapes on the same frames (../shared/data/teacher/
+            clips_blendshapes.csv: another model's predictions, not ground truth): its neutral, its
+            response beside ours, and per shape Pearson r between ours and its over every tracked
+            frame of the clips; --no-teacher leaves it out
   dense     with --dense (label_dense's clips.csv): per shape, Pearson r between the tracker and the
             dense teacher labels over every tracked frame of the clips (teacher labels, not truth)
-Writes PREFIX_neutral.png (per-shape bars) and PREFIX_<clip>.png (time series of the expected
-shapes, with --dense their dense labels too, labelled segments as steps); PREFIX defaults to expressions. --calibrate-neutral calls
+Writes PREFIX_neutral.png (per-shape bars), PREFIX_responses.png (per label and shape, ours beside
+the teacher's) and PREFIX_<clip>.png (time series of the expected shapes, the teacher's too,
+labelled segments as steps); PREFIX defaults to expressions. --calibrate-neutral calls
 Tracker::calibrateNeutral() at the first frame of each clip's first neutral segment; that frame
 is left out of the neutral figure.)";
 
@@ -53,7 +60,7 @@ struct Segment {
     std::string label;
 };
 
-/// The ARKit shapes each label should move.
+/// The ARKit shapes each label should move (squint: either group).
 const std::map<std::string, std::vector<std::string>>& expectedShapes() {
     static const std::map<std::string, std::vector<std::string>> shapes = {
         {"smile", {"mouthSmileLeft", "mouthSmileRight"}},
@@ -61,7 +68,13 @@ const std::map<std::string, std::vector<std::string>>& expectedShapes() {
         {"pucker", {"mouthPucker"}},
         {"funnel", {"mouthFunnel"}},
         {"brows_up", {"browInnerUp", "browOuterUpLeft", "browOuterUpRight"}},
-        {"frown", {"browDownLeft", "browDownRight"}},
+        {"brows_down", {"browDownLeft", "browDownRight"}},
+        {"frown", {"mouthFrownLeft", "mouthFrownRight"}},
+        {"press", {"mouthPressLeft", "mouthPressRight"}},
+        {"mouth_left", {"mouthLeft"}},
+        {"mouth_right", {"mouthRight"}},
+        {"sneer", {"noseSneerLeft", "noseSneerRight"}},
+        {"squint", {"eyeSquintLeft", "eyeSquintRight", "cheekSquintLeft", "cheekSquintRight"}},
         {"cheek_puff", {"cheekPuff"}},
         {"blink", {"eyeBlinkLeft", "eyeBlinkRight"}},
         {"wink_left", {"eyeBlinkLeft"}},
@@ -94,8 +107,10 @@ std::vector<Segment> readLabels(const std::string& path) {
     return segments;
 }
 
+using Weights = std::array<float, kArkitBlendshapeCount>;
+
 struct Track {
-    std::vector<std::optional<std::array<float, kArkitBlendshapeCount>>> arkit;
+    std::vector<std::optional<Weights>> arkit;
     std::vector<float> yaw;
 };
 
@@ -123,12 +138,12 @@ Track trackClip(const std::string& path, const Models& models, const TrackerConf
 }
 
 /// label_dense's clips.csv as ARKit weights, keyed "CLIP#FRAME".
-std::map<std::string, std::array<float, kArkitBlendshapeCount>> readDenseLabels(const std::string& path, const FaceModel& model) {
+std::map<std::string, Weights> readDenseLabels(const std::string& path, const FaceModel& model) {
     const dense::LabelTable table = dense::readLabelTable(path);
     const auto& native = model.expressionNames();
     std::vector<int> column(native.size());
     for (std::size_t k = 0; k < native.size(); ++k) column[k] = table.column(native[k]);
-    std::map<std::string, std::array<float, kArkitBlendshapeCount>> out;
+    std::map<std::string, Weights> out;
     std::vector<float> weights(native.size());
     for (const auto& row : table.rows) {
         for (std::size_t k = 0; k < native.size(); ++k)
@@ -183,99 +198,276 @@ void barPlot(const std::string& path, const std::array<double, kArkitBlendshapeC
     if (!cv::imwrite(path, img)) throw Error("cannot write '" + path + "'");
 }
 
-/// The neutral segments' mean per shape, and the neutral frames with their |yaw|.
-struct NeutralFigures {
-    std::array<double, kArkitBlendshapeCount> mean{};
-    std::vector<std::pair<float, std::array<float, kArkitBlendshapeCount>>> byYaw;
+/// MediaPipe Face Landmarker's blendshape scores of every clip frame (../shared/data/teacher/
+/// clips_blendshapes.csv; teacher labels, not ground truth), keyed "CLIP#FRAME"; frames where it
+/// found no face are left out.
+std::map<std::string, Weights> readTeacher(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw Error("cannot read the blendshape teacher '" + path + "' (--no-teacher leaves it out)");
+    auto split = [](const std::string& line) {
+        std::vector<std::string> fields;
+        std::stringstream s(line);
+        for (std::string f; std::getline(s, f, ',');) fields.push_back(f);
+        return fields;
+    };
+    std::string line;
+    std::getline(in, line);
+    const std::vector<std::string> header = split(line);
+    std::vector<int> shape(header.size(), -1);
+    for (std::size_t c = 0; c < header.size(); ++c) shape[c] = arkitIndex(header[c]);
+    const auto column = [&](const std::string& name) {
+        const auto it = std::find(header.begin(), header.end(), name);
+        if (it == header.end()) throw Error(path + ": no column '" + name + "'");
+        return static_cast<std::size_t>(it - header.begin());
+    };
+    const std::size_t clip = column("clip"), frame = column("frame"), face = column("face");
+    std::map<std::string, Weights> out;
+    while (std::getline(in, line)) {
+        const std::vector<std::string> f = split(line);
+        if (f.size() > face && f[face] == "0") continue;  // no face found: no scores
+        if (f.size() != header.size()) throw Error(path + ": a row without " + std::to_string(header.size()) + " fields");
+        Weights w{};
+        for (std::size_t c = 0; c < f.size(); ++c)
+            if (shape[c] >= 0) w[static_cast<std::size_t>(shape[c])] = std::stof(f[c]);
+        out[f[clip] + "#" + f[frame]] = w;
+    }
+    return out;
+}
+
+/// A labels' source (the teacher's, the dense labels) as a track of `frames` frames of `clip`.
+Track trackOf(const std::map<std::string, Weights>& labels, const std::string& clip, std::size_t frames) {
+    Track t;
+    for (std::size_t f = 0; f < frames; ++f) {
+        const auto it = labels.find(clip + "#" + std::to_string(f));
+        t.arkit.push_back(it == labels.end() ? std::nullopt : std::optional(it->second));
+        t.yaw.push_back(0.f);
+    }
+    return t;
+}
+
+/// What the labelled segments show of one source (the tracker, or a teacher on the same frames).
+struct SegmentFigures {
+    std::array<double, kArkitBlendshapeCount> neutral{};  ///< mean per shape over the neutral frames
+    long neutral_frames = 0;
+    std::vector<std::pair<float, Weights>> byYaw;  ///< the neutral frames with their |yaw|
+    struct Response {
+        long frames = 0;
+        std::vector<double> above;  ///< per expected shape: its mean minus its neutral mean
+    };
+    std::map<std::string, Response> labels;  ///< pooled over a label's segments
+    std::vector<Response> segments;          ///< per segment, in the labels' order
 };
 
-/// Prints the neutral bias and the responses of `tracks` on the labelled segments.
-/// Neutral: every frame of every neutral segment but the calibrating ones.
-NeutralFigures reportSegments(const std::vector<Segment>& segments, const std::map<std::string, Track>& tracks,
+/// The neutral bias and the responses of `tracks` on the labelled segments. Neutral: every frame
+/// of every neutral segment but the calibrating ones.
+SegmentFigures segmentFigures(const std::vector<Segment>& segments, const std::map<std::string, Track>& tracks,
                               const std::map<std::string, const Segment*>& calibrating) {
-    NeutralFigures figures;
-    auto& neutral = figures.mean;
-    long neutralFrames = 0;
+    SegmentFigures out;
     for (const auto& s : segments) {
         if (s.label != "neutral" || !tracks.count(s.clip)) continue;
         const Track& t = tracks.at(s.clip);
         for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
-            if (!t.arkit[static_cast<std::size_t>(f)]) continue;
+            const auto& a = t.arkit[static_cast<std::size_t>(f)];
+            if (!a) continue;
             if (calibrating.count(s.clip) && f <= calibrating.at(s.clip)->first) continue;  // the calibration frame (and before)
-            for (int k = 0; k < kArkitBlendshapeCount; ++k)
-                neutral[static_cast<std::size_t>(k)] += (*t.arkit[static_cast<std::size_t>(f)])[static_cast<std::size_t>(k)];
-            figures.byYaw.push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *t.arkit[static_cast<std::size_t>(f)]});
-            ++neutralFrames;
+            for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) out.neutral[k] += (*a)[k];
+            out.byYaw.push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *a});
+            ++out.neutral_frames;
         }
     }
-    for (auto& v : neutral) v = neutralFrames ? v / static_cast<double>(neutralFrames) : std::nan("");
-    std::printf("neutral (%ld frames): shapes with a mean above 0.10:", neutralFrames);
-    int worst = -1;
-    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
-        const std::string name(arkitNames()[static_cast<std::size_t>(k)]);
-        if (name.rfind("eyeLook", 0) == 0) continue;
-        if (worst < 0 || neutral[static_cast<std::size_t>(k)] > neutral[static_cast<std::size_t>(worst)]) worst = k;
-        if (neutral[static_cast<std::size_t>(k)] > 0.10) std::printf(" %s %.2f", name.c_str(), neutral[static_cast<std::size_t>(k)]);
+    for (auto& v : out.neutral) v = out.neutral_frames ? v / static_cast<double>(out.neutral_frames) : std::nan("");
+    for (const auto& s : segments) {
+        SegmentFigures::Response r;
+        if (s.label != "neutral" && tracks.count(s.clip)) {
+            const auto& shapes = expectedShapes().at(s.label);
+            r.above.assign(shapes.size(), 0.0);
+            const Track& t = tracks.at(s.clip);
+            for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
+                const auto& a = t.arkit[static_cast<std::size_t>(f)];
+                if (!a) continue;
+                for (std::size_t k = 0; k < shapes.size(); ++k) r.above[k] += (*a)[idx(shapes[k])];
+                ++r.frames;
+            }
+            SegmentFigures::Response& pooled = out.labels[s.label];
+            pooled.above.resize(shapes.size(), 0.0);
+            for (std::size_t k = 0; k < shapes.size(); ++k) {
+                pooled.above[k] += r.above[k];
+                r.above[k] = r.frames ? r.above[k] / static_cast<double>(r.frames) - out.neutral[idx(shapes[k])] : std::nan("");
+            }
+            pooled.frames += r.frames;
+        }
+        out.segments.push_back(r);
     }
+    for (auto& [label, r] : out.labels) {
+        const auto& shapes = expectedShapes().at(label);
+        for (std::size_t k = 0; k < shapes.size(); ++k)
+            r.above[k] = r.frames ? r.above[k] / static_cast<double>(r.frames) - out.neutral[idx(shapes[k])] : std::nan("");
+    }
+    return out;
+}
+
+/// Prints the neutral bias and, per label and segment, each expected shape's response; with
+/// `teacher`, the teacher's on the same frames beside it in brackets.
+void printFigures(const std::vector<Segment>& segments, const SegmentFigures& ours, const SegmentFigures* teacher) {
+    std::printf("neutral (%ld frames): shapes with a mean above 0.10:", ours.neutral_frames);
+    int worst = -1;
     double total = 0;
     int counted = 0;
     for (int k = 0; k < kArkitBlendshapeCount; ++k) {
-        if (std::string(arkitNames()[static_cast<std::size_t>(k)]).rfind("eyeLook", 0) == 0) continue;
-        total += neutral[static_cast<std::size_t>(k)];
+        const std::string name(arkitNames()[static_cast<std::size_t>(k)]);
+        if (name.rfind("eyeLook", 0) == 0) continue;
+        const double v = ours.neutral[static_cast<std::size_t>(k)];
+        if (worst < 0 || v > ours.neutral[static_cast<std::size_t>(worst)]) worst = k;
+        if (v > 0.10) std::printf(" %s %.2f", name.c_str(), v);
+        total += v;
         ++counted;
     }
     std::printf("\n  mean over the %d shapes (eyeLook excluded) %.3f; worst: %s %.2f (target: every shape <= 0.10)\n", counted,
                 total / counted, std::string(arkitNames()[static_cast<std::size_t>(worst)]).c_str(),
-                neutral[static_cast<std::size_t>(worst)]);
-
-    // Responses: per label, each expected shape's segment mean minus its neutral mean.
-    std::printf("response (segment mean - neutral mean; target >= 0.4, blink >= 0.6):\n");
-    for (const auto& [label, shapes] : expectedShapes()) {
-        std::vector<double> sums(shapes.size(), 0.0);
-        long frames = 0;
-        for (const auto& s : segments) {
-            if (s.label != label || !tracks.count(s.clip)) continue;
-            const Track& t = tracks.at(s.clip);
-            for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
-                if (!t.arkit[static_cast<std::size_t>(f)]) continue;
-                for (std::size_t k = 0; k < shapes.size(); ++k) sums[k] += (*t.arkit[static_cast<std::size_t>(f)])[idx(shapes[k])];
-                ++frames;
-            }
+                ours.neutral[static_cast<std::size_t>(worst)]);
+    if (teacher) {
+        std::printf("  the teacher's neutral on the same frames, above 0.10:");
+        for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k)
+            if (teacher->neutral[k] > 0.10 && std::string(arkitNames()[k]).rfind("eyeLook", 0) != 0)
+                std::printf(" %s %.2f", std::string(arkitNames()[k]).c_str(), teacher->neutral[k]);
+        std::printf("\n");
+    }
+    auto shapesLine = [&](const std::vector<std::string>& shapes, const std::vector<double>& a, const std::vector<double>* b, bool named) {
+        for (std::size_t k = 0; k < shapes.size(); ++k) {
+            std::printf(named ? " %s %+.2f" : "%.0s %+.2f", shapes[k].c_str(), a[k]);
+            if (b) std::printf(" (%+.2f)", (*b)[k]);
         }
-        if (frames == 0) {
+        std::printf("\n");
+    };
+    std::printf("response (segment mean - neutral mean; target >= 0.3%s):\n", teacher ? "; the teacher's in brackets" : "");
+    for (const auto& [label, shapes] : expectedShapes()) {
+        const auto it = ours.labels.find(label);
+        if (it == ours.labels.end() || it->second.frames == 0) {
             std::printf("  %-11s no labelled frames\n", label.c_str());
             continue;
         }
-        std::printf("  %-11s (%4ld frames):", label.c_str(), frames);
-        for (std::size_t k = 0; k < shapes.size(); ++k)
-            std::printf(" %s %+.2f", shapes[k].c_str(), sums[k] / static_cast<double>(frames) - neutral[idx(shapes[k])]);
-        std::printf("\n");
+        std::printf("  %-11s (%4ld frames):", label.c_str(), it->second.frames);
+        shapesLine(shapes, it->second.above, teacher ? &teacher->labels.at(label).above : nullptr, true);
         // Each segment on its own: a label's pooled figure hides segments that show it weakly.
-        for (const auto& s : segments) {
-            if (s.label != label || !tracks.count(s.clip)) continue;
-            const Track& t = tracks.at(s.clip);
-            std::vector<double> segmentSums(shapes.size(), 0.0);
-            long segmentFrames = 0;
-            for (int f = s.first; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
-                if (!t.arkit[static_cast<std::size_t>(f)]) continue;
-                for (std::size_t k = 0; k < shapes.size(); ++k) segmentSums[k] += (*t.arkit[static_cast<std::size_t>(f)])[idx(shapes[k])];
-                ++segmentFrames;
-            }
-            if (segmentFrames == 0) continue;
-            std::printf("    %s %d-%d:", std::filesystem::path(s.clip).stem().string().c_str(), s.first, s.last);
-            for (std::size_t k = 0; k < shapes.size(); ++k)
-                std::printf(" %+.2f", segmentSums[k] / static_cast<double>(segmentFrames) - neutral[idx(shapes[k])]);
-            std::printf("\n");
+        for (std::size_t i = 0; i < segments.size(); ++i) {
+            const Segment& s = segments[i];
+            if (s.label != label || ours.segments[i].frames == 0) continue;
+            std::printf("    %s %d-%d:", fs::path(s.clip).stem().string().c_str(), s.first, s.last);
+            shapesLine(shapes, ours.segments[i].above, teacher ? &teacher->segments[i].above : nullptr, false);
         }
     }
-    return figures;
+}
+
+/// Per label and expected shape, our response beside the teacher's: grouped bars.
+void responsePlot(const std::string& path, const SegmentFigures& ours, const SegmentFigures& teacher) {
+    std::vector<std::pair<std::string, std::pair<double, double>>> bars;
+    for (const auto& [label, r] : ours.labels) {
+        if (r.frames == 0) continue;
+        const auto& shapes = expectedShapes().at(label);
+        for (std::size_t k = 0; k < shapes.size(); ++k)
+            bars.push_back({label + ": " + shapes[k], {r.above[k], teacher.labels.at(label).above[k]}});
+    }
+    const int left = 50, bottom = 190, top = 40, step = 28;
+    const int w = left + step * static_cast<int>(bars.size()) + 20, h = 520;
+    cv::Mat img(h, std::max(w, 400), CV_8UC3, cv::Scalar(255, 255, 255));
+    cv::putText(img, "response above neutral per label and shape: ours (blue) beside the blendshape teacher's (orange)", {left, 22},
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    const double scale = (h - bottom - top) / 1.2;  // -0.2 .. 1.0
+    const int zero = h - bottom - static_cast<int>(0.2 * scale);
+    for (int t = -2; t <= 10; ++t) {
+        const int y = zero - static_cast<int>(t * 0.1 * scale);
+        cv::line(img, {left, y}, {img.cols - 10, y}, t == 0 ? cv::Scalar(0, 0, 0) : cv::Scalar(230, 230, 230), 1);
+        if (t % 2 == 0) {
+            char label[8];
+            std::snprintf(label, sizeof label, "%+.1f", t * 0.1);
+            cv::putText(img, label, {4, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+        }
+    }
+    const int target = zero - static_cast<int>(0.3 * scale);
+    cv::line(img, {left, target}, {img.cols - 10, target}, cv::Scalar(60, 180, 60), 1);
+    for (std::size_t i = 0; i < bars.size(); ++i) {
+        const int x = left + step * static_cast<int>(i) + 3;
+        const auto [a, b] = bars[i].second;
+        auto bar = [&](int x0, double v, const cv::Scalar& colour) {
+            if (!std::isfinite(v)) return;
+            const int y = zero - static_cast<int>(std::clamp(v, -0.2, 1.0) * scale);
+            cv::rectangle(img, {x0, std::min(y, zero)}, {x0 + 10, std::max(y, zero)}, colour, -1);
+        };
+        bar(x, a, cv::Scalar(200, 110, 30));
+        bar(x + 11, b, cv::Scalar(40, 140, 240));
+        cv::Mat text(12, bottom - 10, CV_8UC3, cv::Scalar(255, 255, 255));
+        cv::putText(text, bars[i].first, {0, 10}, cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+        cv::Mat rotated;
+        cv::rotate(text, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
+        rotated.copyTo(img(cv::Rect(x + 5, h - bottom + 6, 12, bottom - 10)));
+    }
+    if (!cv::imwrite(path, img)) throw Error("cannot write '" + path + "'");
+}
+
+/// The output's jitter on the neutral segments, per group of shapes: the mean |w_t - w_(t-1)| over
+/// consecutive neutral frames (a relaxed face holds still; what moves is noise).
+void printJitter(const std::vector<Segment>& segments, const std::map<std::string, Track>& tracks) {
+    const std::vector<std::pair<std::string, std::vector<std::string>>> groups = {{"brows", {"browDown", "browInnerUp", "browOuterUp"}},
+                                                                                  {"eyes", {"eyeBlink", "eyeSquint", "eyeWide"}},
+                                                                                  {"mouth and jaw", {"mouth", "jaw"}},
+                                                                                  {"cheeks and nose", {"cheek", "nose"}}};
+    std::printf("jitter on the neutral segments, mean |frame-to-frame change|:");
+    for (const auto& [group, prefixes] : groups) {
+        double sum = 0.0;
+        long n = 0;
+        for (const auto& s : segments) {
+            if (s.label != "neutral" || !tracks.count(s.clip)) continue;
+            const Track& t = tracks.at(s.clip);
+            for (int f = s.first + 1; f <= s.last && f < static_cast<int>(t.arkit.size()); ++f) {
+                const auto &a = t.arkit[static_cast<std::size_t>(f - 1)], &b = t.arkit[static_cast<std::size_t>(f)];
+                if (!a || !b) continue;
+                for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
+                    const std::string name(arkitNames()[k]);
+                    if (std::none_of(prefixes.begin(), prefixes.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; }))
+                        continue;
+                    sum += std::fabs((*b)[k] - (*a)[k]);
+                    ++n;
+                }
+            }
+        }
+        std::printf(" %s %.4f", group.c_str(), n ? sum / static_cast<double>(n) : std::nan(""));
+    }
+    std::printf("\n");
+}
+
+/// Per shape, Pearson r between the tracker and `labels` over every frame both have, printed
+/// (eyeLook left out); the targets marked *.
+void printAgreement(const char* what, const std::vector<std::string>& clips, const std::map<std::string, Track>& tracks,
+                    const std::map<std::string, Weights>& labels, const std::vector<std::string>& targets) {
+    std::array<std::vector<double>, kArkitBlendshapeCount> ours, theirs;
+    for (const auto& clip : clips) {
+        const Track& t = tracks.at(clip);
+        for (std::size_t f = 0; f < t.arkit.size(); ++f) {
+            const auto it = labels.find(clip + "#" + std::to_string(f));
+            if (!t.arkit[f] || it == labels.end()) continue;
+            for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
+                ours[k].push_back((*t.arkit[f])[k]);
+                theirs[k].push_back(it->second[k]);
+            }
+        }
+    }
+    std::printf("%s (%zu frames), Pearson r per shape (target >= 0.8 for the marked *):\n ", what, ours[0].size());
+    int column = 0;
+    for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
+        const std::string name(arkitNames()[k]);
+        if (name.rfind("eyeLook", 0) == 0) continue;
+        const bool target = std::find(targets.begin(), targets.end(), name) != targets.end();
+        std::printf(" %s%s %+.2f", target ? "*" : "", name.c_str(), pearson(ours[k], theirs[k]));
+        if (++column % 6 == 0) std::printf("\n ");
+    }
+    std::printf("\n  (nan: one side is constant, e.g. a shape neither estimates)\n");
 }
 
 }  // namespace
 
 int runEvalExpressions(const std::vector<std::string>& argv) {
     const Args args(argv, trackingOptions({"--labels", "--plot", "--dense"}),
-                    trackingFlags({"--help", "--no-mirror", "--calibrate-neutral"}));
+                    trackingFlags({"--help", "--no-mirror", "--calibrate-neutral", "--held-out", "--no-teacher"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -285,17 +477,27 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     // The repository's labels: from the working directory, or beside the models/ folder in use.
     const std::string defaultLabels = core::firstExistingFile(
         {"data/expression_labels.csv", modelDirectory() + "/../data/expression_labels.csv"});
-    const auto segments = readLabels(args.get("--labels", defaultLabels.empty() ? "data/expression_labels.csv" : defaultLabels));
+    const std::string labelsPath = args.get("--labels", defaultLabels.empty() ? "data/expression_labels.csv" : defaultLabels);
+    const auto segments = readLabels(labelsPath);
     std::vector<std::string> clips = args.positional();
     if (clips.empty()) {
+        const std::vector<std::string> heldOut = args.has("--held-out")
+                                                     ? tools::clipsOfSplit(
+                                                           "heldout", (fs::path(labelsPath).parent_path() / "clip_splits.csv").string())
+                                                     : std::vector<std::string>{};
         for (const auto& s : segments)
-            if (std::find(clips.begin(), clips.end(), s.clip) == clips.end()) clips.push_back(s.clip);
+            if (std::find(clips.begin(), clips.end(), s.clip) == clips.end() &&
+                (heldOut.empty() || std::find(heldOut.begin(), heldOut.end(), s.clip) != heldOut.end()))
+                clips.push_back(s.clip);
+        if (args.has("--held-out")) std::printf("the held-out people's labelled clips (%zu)\n", clips.size());
     }
     const TrackerConfig config = trackerConfig(args);
     const Models models = trackingModels(args);
     const std::string prefix = args.get("--plot", "expressions");
-    std::map<std::string, std::array<float, kArkitBlendshapeCount>> dense;
+    std::map<std::string, Weights> dense;
     if (args.has("--dense")) dense = readDenseLabels(args.get("--dense"), *models.face);
+    std::map<std::string, Weights> teacher;
+    if (!args.has("--no-teacher")) teacher = readTeacher(shared + "/data/teacher/clips_blendshapes.csv");
     // A clip is a name in ../shared/data/clips (as the labels name it) or a path to one.
     std::map<std::string, std::string> paths;
     for (auto& clip : clips) {
@@ -320,8 +522,16 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     }
     if (calibrate)
         std::printf("neutral calibrated at the first frame of each clip's first neutral segment (%zu clips)\n", calibrating.size());
-    const auto neutralFigures = reportSegments(segments, tracks, calibrating);
-    const auto& neutral = neutralFigures.mean;
+    const SegmentFigures neutralFigures = segmentFigures(segments, tracks, calibrating);
+    std::optional<SegmentFigures> teacherFigures;
+    if (!teacher.empty()) {
+        std::map<std::string, Track> teacherTracks;
+        for (const auto& clip : clips) teacherTracks[clip] = trackOf(teacher, clip, tracks[clip].arkit.size());
+        teacherFigures = segmentFigures(segments, teacherTracks, calibrating);
+    }
+    printFigures(segments, neutralFigures, teacherFigures ? &*teacherFigures : nullptr);
+    printJitter(segments, tracks);
+    const auto& neutral = neutralFigures.neutral;
     // Mirror consistency: the mirrored clip's right shape against the clip's left shape.
     if (!args.has("--no-mirror")) {
         double sum = 0;
@@ -369,43 +579,19 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     std::printf("yaw: neutral frames with |yaw| 0-10 / 10-20 / 20-30 deg: %ld / %ld / %ld; largest change of a shape's mean %.2f (%s)\n",
                 binFrames[0], binFrames[1], binFrames[2], drift, driftShape.c_str());
 
+    // The targets the per-frame agreement is read against.
+    const std::vector<std::string> rTargets = {"jawOpen",     "mouthSmileLeft", "mouthSmileRight", "mouthPucker",    "mouthFunnel",
+                                               "browInnerUp", "browDownLeft",   "browDownRight",   "mouthPressLeft", "mouthPressRight"};
+    if (!teacher.empty()) {
+        printAgreement("the blendshape teacher (MediaPipe's predictions, not truth)", clips, tracks, teacher, rTargets);
+        responsePlot(prefix + "_responses.png", neutralFigures, *teacherFigures);
+    }
     if (args.has("--dense")) {
-        std::array<std::vector<double>, kArkitBlendshapeCount> ours, theirs;
-        for (const auto& clip : clips) {
-            const Track& t = tracks[clip];
-            for (std::size_t f = 0; f < t.arkit.size(); ++f) {
-                const auto it = dense.find(clip + "#" + std::to_string(f));
-                if (!t.arkit[f] || it == dense.end()) continue;
-                for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
-                    ours[k].push_back((*t.arkit[f])[k]);
-                    theirs[k].push_back(it->second[k]);
-                }
-            }
-        }
-        std::printf("dense teacher labels (%zu frames), Pearson r per shape (target >= 0.8 for the marked *):\n ", ours[0].size());
-        const std::vector<std::string> targets = {"jawOpen",     "mouthSmileLeft", "mouthSmileRight", "mouthPucker",
-                                                  "mouthFunnel", "browInnerUp",    "browDownLeft",    "browDownRight"};
-        int column = 0;
-        for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) {
-            const std::string name(arkitNames()[k]);
-            if (name.rfind("eyeLook", 0) == 0) continue;
-            const bool target = std::find(targets.begin(), targets.end(), name) != targets.end();
-            std::printf(" %s%s %+.2f", target ? "*" : "", name.c_str(), pearson(ours[k], theirs[k]));
-            if (++column % 6 == 0) std::printf("\n ");
-        }
-        std::printf("\n  (nan: one side is constant, e.g. a shape neither estimates)\n");
-        // The labels themselves on the hand-labelled segments: are they a fair target?
-        std::map<std::string, Track> labelTracks;
-        for (const auto& clip : clips) {
-            Track& t = labelTracks[clip];
-            for (std::size_t f = 0; f < tracks[clip].arkit.size(); ++f) {
-                const auto it = dense.find(clip + "#" + std::to_string(f));
-                t.arkit.push_back(it == dense.end() ? std::nullopt : std::optional(it->second));
-                t.yaw.push_back(0.f);
-            }
-        }
+        printAgreement("dense teacher labels", clips, tracks, dense, rTargets);
+        std::map<std::string, Track> labelTracks;  // are they a fair target on the labelled segments?
+        for (const auto& clip : clips) labelTracks[clip] = trackOf(dense, clip, tracks[clip].arkit.size());
         std::printf("the dense teacher labels themselves on the labelled segments:\n");
-        reportSegments(segments, labelTracks, {});
+        printFigures(segments, segmentFigures(segments, labelTracks, {}), nullptr);
     }
 
     barPlot(prefix + "_neutral.png", neutral, "mean ARKit weight on the labelled neutral segments");
@@ -430,6 +616,14 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
                 for (std::size_t f = 0; f < t.arkit.size(); ++f)
                     if (t.arkit[f]) line.points.push_back({static_cast<double>(f), (*t.arkit[f])[idx(shape)]});
                 plot.series.push_back(line);
+                if (!teacher.empty()) {
+                    PlotSeries taught{shape + " (teacher)", {}};
+                    for (std::size_t f = 0; f < t.arkit.size(); ++f) {
+                        const auto it = teacher.find(clip + "#" + std::to_string(f));
+                        if (it != teacher.end()) taught.points.push_back({static_cast<double>(f), it->second[idx(shape)]});
+                    }
+                    plot.series.push_back(taught);
+                }
                 if (dense.empty()) continue;
                 PlotSeries labelled{shape + " (dense labels)", {}};
                 for (std::size_t f = 0; f < t.arkit.size(); ++f) {

@@ -8,7 +8,7 @@
 #   tools/train/retrain_all.sh --only N   run step N alone
 #
 # Each step's output goes to build/retrain/<step>.log; a finished step leaves build/retrain/<step>.done,
-# so a second run (after a reboot, a kill) skips it. About 3 h 20 min on the 2-core development
+# so a second run (after a reboot, a kill) skips it. About 4 h on the 2-core development
 # machine, summed from each step's measured time (tools/README.md). Run it in the background:
 #   nohup tools/train/retrain_all.sh > build/retrain.out 2>&1 &
 set -euo pipefail
@@ -28,7 +28,7 @@ steps=(
   "refine_data     15 min  LBF's points on 300-W, face-profiled copies, the crops as arrays"
   "refine          60 min  the landmark refiner"
   "sides           30 min  the brow and eye refiner per side"
-  "expression      21 min  the expression stage's samples and net, packed into the CNN file"
+  "expression      60 min  the expression stage's samples (teacher, warped faces) and net, packed into the CNN file"
 )
 
 done_file() { echo "$out/$1.done"; }
@@ -80,12 +80,14 @@ run_step() {
       $bin/pack_cnn --base $models/cnn_cascade.ftm --sides build/region/c8.onnx --out $models/cnn_cascade.ftm \
         --provenance "tools/train/retrain_all.sh: refiner, sides" ;;
     expression)
-      $bin/make_cnn_samples --starts-from fit --max-start-deg 25 --perturb 16 --clip-perturb 6 --profiled 3 --rotation-deg 5 \
-        --yaw-deg 6 --translation 0.02 --depth 0.04 --expression-sigma 0.05 --expression-copies 2 --out build/cnn_samples_moved
-      "${py[@]}" tools.train.expression.train_stage --samples build/cnn_samples_moved --out build/cnn/expr --expressions --dropout 0.3 \
-        --hold-out-clips liveportrait_d3_,liveportrait_d10_ --widths 12,24,48,72 --hidden 192 --epochs 22 --minutes 120
-      $bin/pack_cnn --base $models/cnn_cascade.ftm --nets build/cnn/expr.onnx --expressions-only --rest-from-validation \
-        --mirror-average --min-validation-r 0.5 --out $models/cnn_cascade.ftm --provenance "tools/train/retrain_all.sh: refiner, sides, expressions" ;;
+      $bin/make_cnn_samples --starts-from fit --max-start-deg 25 --perturb 6 --clip-perturb 3 --rotation-deg 5 --yaw-deg 6 \
+        --translation 0.02 --depth 0.04 --expression-sigma 0.05 --tracked-clips --expression-copies 6 --clip-copies 3 \
+        --clip-copy-every 6 --arkit ../shared/data/arkit --arkit-every 4 --out build/cnn_samples_v2
+      "${py[@]}" tools.train.expression.train_stage --samples build/cnn_samples_v2 --out build/cnn/v2 --expressions \
+        --teacher ../shared/data/teacher --copies-per-epoch 2 --clips-per-epoch 1.5 --dropout 0.3 --minutes 45
+      $bin/pack_cnn --base $models/cnn_cascade.ftm --nets build/cnn/v2.onnx --expressions-only --rest-from-validation \
+        --gain-from-validation --mirror-average --min-validation-r 0.1 --corrects-fit --out $models/cnn_cascade.ftm \
+        --provenance "tools/train/retrain_all.sh: refiner, sides, expressions" ;;
     *) echo "retrain_all: no step '$name'" >&2; return 2 ;;
   esac
 }

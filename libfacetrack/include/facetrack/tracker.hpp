@@ -93,9 +93,9 @@ struct TrackerConfig {
     /// steadies the points too; without the CNN file five jitter less.
     int landmark_starts = 3;
     /// Run the CNN file's cascade stages (the "cnn" stage). The shipped file's
-    /// reads nine ARKit shapes the landmarks do not see (browDown, cheekPuff,
-    /// cheekSquint, mouthShrug, mouthStretch; docs/cnn.md) in about 0.3 ms a
-    /// frame on one core; false leaves them at 0 and the file's refiners only.
+    /// reads 28 ARKit shapes from the face's texture and corrects the fit's
+    /// (pucker, the brows, squint, press; docs/cnn.md) in about 0.25 ms a frame
+    /// on one core; false leaves the fit's 15 and the file's refiners only.
     bool cnn_stage = true;
 };
 

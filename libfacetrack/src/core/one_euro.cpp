@@ -26,7 +26,8 @@ const Eigen::VectorXd& OneEuroFilter::operator()(const Eigen::VectorXd& x, doubl
     const double aSpeed = alpha(settings_.derivative_cutoff_hz, dt);
     speed_ += aSpeed * ((x - value_) / (dt * scale) - speed_);
     for (Eigen::Index i = 0; i < x.size(); ++i) {
-        const double cutoff = settings_.min_cutoff_hz + extraCutoffHz + settings_.beta * std::abs(speed_[i]);
+        const double scaled = min_cutoff_scale_.size() == x.size() ? min_cutoff_scale_[i] : 1.0;
+        const double cutoff = scaled * settings_.min_cutoff_hz + extraCutoffHz + settings_.beta * std::abs(speed_[i]);
         value_[i] += alpha(cutoff, dt) * (x[i] - value_[i]);
     }
     return value_;

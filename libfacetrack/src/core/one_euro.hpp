@@ -9,6 +9,8 @@
 
 #include <Eigen/Core>
 
+#include <utility>
+
 namespace facetrack::core {
 
 struct OneEuroSettings {
@@ -32,9 +34,15 @@ public:
 
     void reset() { value_.resize(0); }
 
+    /// Per element i, f_min becomes s_i f_min (a vector of another size than
+    /// the samples', or none: 1 for all): elements that move at different
+    /// speeds (brows, lips) each get their own rest cutoff.
+    void setMinCutoffScale(Eigen::VectorXd scale) { min_cutoff_scale_ = std::move(scale); }
+
 private:
     OneEuroSettings settings_;
     Eigen::VectorXd value_, speed_;
+    Eigen::VectorXd min_cutoff_scale_;
 };
 
 /// The speed of one point, |v^|, in units of `scale` per second: its raw

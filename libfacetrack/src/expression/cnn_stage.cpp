@@ -83,7 +83,8 @@ public:
             const int e = layout_.anchors.expressions[k];
             const bool fitted = std::find(upstream.expressions.begin(), upstream.expressions.end(), e) != upstream.expressions.end();
             const bool read = d.reported.empty() || d.reported[k];
-            if (!d.expressions_only || (read && (!fitted || d.corrects_fit))) reported_.push_back({static_cast<int>(k), !fitted});
+            if (!d.expressions_only || (read && (!fitted || d.corrects_fit)))
+                reported_.push_back({static_cast<int>(k), !fitted || d.corrects_fit});
         }
     }
 
@@ -111,10 +112,12 @@ public:
         if (!cascade_->expressionsOnly()) r.pose = fit::headPoseOf(s.params);
         std::vector<float>& native = r.expression->native;
         const std::vector<float>& neutral = model::dataOf(*cascade_).neutral;
+        const std::vector<float>& full = model::dataOf(*cascade_).full;
         for (const auto& [k, neutralised] : reported_) {
             float w = static_cast<float>(s.params.expression[k]);
             if (!neutral.empty() && neutralised) {
-                w = std::clamp((w - neutral[static_cast<std::size_t>(k)]) / (1.f - neutral[static_cast<std::size_t>(k)]), 0.f, 1.f);
+                const auto i = static_cast<std::size_t>(k);
+                w = std::clamp((w - neutral[i]) / ((full.empty() ? 1.f : full[i]) - neutral[i]), 0.f, 1.f);
             }
             native[static_cast<std::size_t>(layout_.anchors.expressions[static_cast<std::size_t>(k)])] = w;
         }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <string>
 
 namespace facetrack::filter {
 
@@ -18,6 +19,18 @@ constexpr double kTranslationScaleMm = 90.0;  // ~ an eye-corner distance: the u
 /// the same jitter it lags fast head moves less (docs/benchmarks.md, "The
 /// filter on a face that moves").
 constexpr double kFaceMotionGain = 5.0;
+
+/// Each expression's rest cutoff, as a factor on the filter's min cutoff: brows move slowly and
+/// their estimate is the noisiest, so they are held steadier; the lips and jaw follow speech, so
+/// they are let through faster; the rest (cheeks, nose, eye squint) as set. The eye shapes the
+/// gaze stage smooths itself (blinks must not lag) pass through.
+double minCutoffScale(const std::string& name) {
+    for (const char* brow : {"browDown", "browInnerUp", "browOuterUp"})
+        if (name.rfind(brow, 0) == 0) return 0.5;
+    for (const char* speech : {"jaw", "mouth"})
+        if (name.rfind(speech, 0) == 0) return 1.5;
+    return 1.0;
+}
 
 struct FilterFaceState final : pipeline::StageState {
     explicit FilterFaceState(const core::OneEuroSettings& s)
@@ -32,12 +45,18 @@ struct FilterFaceState final : pipeline::StageState {
 class FilterStage final : public pipeline::Stage {
 public:
     FilterStage(std::shared_ptr<const FaceModel> model, const core::OneEuroSettings& settings, bool enabled)
-        : model_(std::move(model)), settings_(settings), enabled_(enabled) {}
+        : model_(std::move(model)), settings_(settings), enabled_(enabled) {
+        if (!model_) return;  // no expressions to filter
+        const auto& names = model_->expressionNames();
+        expression_cutoff_scale_.resize(static_cast<Eigen::Index>(names.size()));
+        for (std::size_t k = 0; k < names.size(); ++k) expression_cutoff_scale_[static_cast<Eigen::Index>(k)] = minCutoffScale(names[k]);
+    }
 
     StageInfo info() const override {
         if (!enabled_) return {"filter", false, "off (TrackerConfig::filter.enabled)"};
-        char detail[96];
-        std::snprintf(detail, sizeof detail, "1-euro (min cutoff %g Hz, beta %g)", settings_.min_cutoff_hz, settings_.beta);
+        char detail[128];
+        std::snprintf(detail, sizeof detail, "1-euro (min cutoff %g Hz, beta %g; brows x0.5, lips and jaw x1.5)", settings_.min_cutoff_hz,
+                      settings_.beta);
         return {"filter", true, detail};
     }
 
@@ -48,7 +67,11 @@ public:
 
     void connect(const pipeline::Upstream& upstream) override { pass_through_ = upstream.smoothed_expressions; }
 
-    std::unique_ptr<pipeline::StageState> newFaceState() const override { return std::make_unique<FilterFaceState>(settings_); }
+    std::unique_ptr<pipeline::StageState> newFaceState() const override {
+        auto s = std::make_unique<FilterFaceState>(settings_);
+        s->expression.setMinCutoffScale(expression_cutoff_scale_);
+        return s;
+    }
 
     pipeline::Outcome run(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, pipeline::StageState* state) override {
         auto& s = static_cast<FilterFaceState&>(*state);
@@ -112,7 +135,8 @@ private:
     std::shared_ptr<const FaceModel> model_;
     core::OneEuroSettings settings_;
     bool enabled_;
-    std::vector<int> pass_through_;  // native expressions smoothed by an earlier stage
+    std::vector<int> pass_through_;            // native expressions smoothed by an earlier stage
+    Eigen::VectorXd expression_cutoff_scale_;  // per native expression, minCutoffScale()
 };
 
 }  // namespace

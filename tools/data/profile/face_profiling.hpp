@@ -65,20 +65,33 @@ std::vector<ProfiledCopy> profiledCopies(const FaceModel& model, const cv::Mat& 
                                          const std::vector<float>& identity, const std::vector<float>& expression,
                                          const fit::FaceParams& label, int tries, std::mt19937& rng);
 
-/// `count` copies of a labelled photograph at its own pose with one group of
-/// shapes moved (one of `groups`, drawn alike; all of them when empty: "brows_down"
-/// browDown_L/R, "inner_brows_up" browInnerUp_L/R, "brows_up" browInnerUp and
-/// browOuterUp, both sides, "pucker" mouthPucker) to a weight uniform in [0, 0.9] (the label's
-/// `expressions`, native indices in its order, moved alike; copies more than
-/// 15 % hidden dropped). The 68 points barely follow these shapes and the
-/// dense labels' brows barely respond on the clips (docs/expressions.md), so
-/// copies whose shapes moved by a known amount teach a net to read them from
-/// the texture. The label of a copy is the photograph's with the group moved.
-/// Throws Error for a group name it does not know.
+/// Expression warping: `count` copies of a labelled photograph at its own pose with its
+/// expression changed, each pixel of the head carried by the mesh's displacement (profileFace),
+/// the label exact: the photograph's weights with the change. A copy either moves one named
+/// group of shapes to a weight uniform in [0, 0.9] ("brows_down" browDown_L/R, "inner_brows_up",
+/// "brows_up" browInnerUp and browOuterUp, "pucker"; then every shape warping may raise by its
+/// native name, e.g. "mouthFrown_L", and a left/right pair by its stem, "mouthFrown": the list is
+/// expressionCopyGroups()), or, as the group "captured", takes a real face's weights from
+/// `captures` (readArkitCaptures) in place of the photograph's. `groups` names those drawn from,
+/// alike; empty: all (and "captured" when captures are given). Shapes that open the mouth or the
+/// eyes, the look shapes and the model's extras never rise above the photograph's: it shows no
+/// mouth's inside (the label's `expressions`: native indices in its order; copies more than 15 %
+/// hidden dropped). The 68 points barely follow most of these shapes and no teacher sees some
+/// (cheekPuff, noseSneer, cheekSquint, jawForward), so copies whose shapes moved by a known amount
+/// teach a net to read them from the texture. Throws Error for a group name it does not know.
 std::vector<ProfiledCopy> expressionCopies(const FaceModel& model, const cv::Mat& source, const core::Camera& camera,
                                            const std::vector<float>& identity, const std::vector<int>& expressions,
                                            const fit::FaceParams& label, int count, std::mt19937& rng,
-                                           const std::vector<std::string>& groups = {});
+                                           const std::vector<std::string>& groups = {},
+                                           const std::vector<std::vector<float>>& captures = {});
+
+/// The group names expressionCopies() knows for this face model (without "captured").
+std::vector<std::string> expressionCopyGroups(const FaceModel& model);
+
+/// Real faces' expressions: every `every`-th frame of each Live Link Face CSV in `directory`
+/// (../shared/data/arkit: iPhone ARKit captures), as native weights in the face model's order
+/// (a shape the captures lack, 0). Throws Error when the folder has no CSV.
+std::vector<std::vector<float>> readArkitCaptures(const FaceModel& model, const std::string& directory, int every = 1);
 
 /// A head turn as a clip: the photograph at yaw y0 turned, `stepDeg` a frame,
 /// to +80 deg and back to y0, then to -80 deg and back. Each leg stops at its

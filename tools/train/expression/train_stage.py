@@ -35,7 +35,9 @@ def load_all(loader, samples, name, splits):
     parts = [t for t in (loader(d, name, splits) for d in samples.split(",")) if t is not None and len(t[0])]
     if not parts:
         return None
-    return torch.cat([t[0] for t in parts]), torch.cat([t[1] for t in parts]), parts[0][2]
+    return (torch.cat([t[0] for t in parts]), torch.cat([t[1] for t in parts]), parts[0][2],
+            torch.cat([t[3] if len(t) > 3 else torch.ones_like(t[1]) for t in parts]),
+            torch.cat([t[4] for t in parts]) if len(parts[0]) > 4 else None)
 
 
 def read_csv(path):
@@ -52,30 +54,125 @@ def kept(row, splits):
     return row[1] in splits and not any(c in row[0] for c in HOLD_OUT_CLIPS)
 
 
+# Shapes MediaPipe's blendshape model never moves (../shared/data/teacher/README.md): its scores
+# for them are no reading, so they are learnt from the dense labels alone, where a sample has them.
+TEACHER_BLIND = {"cheekPuff", "noseSneerLeft", "noseSneerRight", "cheekSquintLeft", "cheekSquintRight", "jawForward", "tongueOut"}
+
+
+def mirror_name(name):
+    """The shape a face's mirror image shows for `name` (left and right swap)."""
+    for a, b in (("_L", "_R"), ("Left", "Right")):
+        if name.endswith(a): return name[:-len(a)] + b
+        if name.endswith(b): return name[:-len(b)] + a
+    return name
+
+
+def arkit_name(native):
+    """The ARKit name of a face-model expression ("browDown_L" -> "browDownLeft")."""
+    for suffix, side in (("_L", "Left"), ("_R", "Right")):
+        if native.endswith(suffix):
+            return native[:-len(suffix)] + side
+    return native
+
+
+class Teacher:
+    """MediaPipe Face Landmarker's blendshape scores (../shared/data/teacher/*_blendshapes.csv:
+    another model's predictions, not ground truth) by sample key, each shape relative to its rest
+    level: w = clamp((s - s0) / (1 - s0), 0, 1), s0 the shape's median over the 300-W training
+    crops (the teacher reads eyeSquint about 0.4 and browOuterUp up to 0.4 on relaxed faces)."""
+
+    def __init__(self, folder):
+        self.scores, self.rest = {}, {}
+        train_crops = []
+        for name, keyed in (("faces300w", lambda r: r["image"]), ("clips", lambda r: f"{r['clip']}#{r['frame']}")):
+            with open(os.path.join(folder, name + "_blendshapes.csv")) as f:
+                reader = csv.DictReader(f)
+                shapes = reader.fieldnames[reader.fieldnames.index("_neutral") + 1:reader.fieldnames.index("m00")]
+                for r in reader:
+                    if r["face"] != "1":
+                        continue
+                    key = keyed(r)
+                    self.scores[key] = {n: float(r[n]) for n in shapes}
+                    if name == "faces300w" and "testset" not in key:
+                        train_crops.append(self.scores[key])
+        median = {n: float(np.median([c[n] for c in train_crops])) for n in train_crops[0]}
+        for n in median:  # a pair alike: a face and its mirror image read alike
+            self.rest[n] = (median[n] + median.get(mirror_name(n), median[n])) / 2
+
+    def targets(self, key, names):
+        """Per expression in `names` (face-model names), the teacher's weight, or NaN where it has none."""
+        scores = self.scores.get(key)
+        out = np.full(len(names), np.nan, dtype=np.float32)
+        if scores is None:
+            return None
+        for k, n in enumerate(names):
+            a = arkit_name(n)
+            if a in scores and a not in TEACHER_BLIND:
+                s0 = min(self.rest[a], 0.9)
+                out[k] = min(max((scores[a] - s0) / (1.0 - s0), 0.0), 1.0)
+        return out
+
+
+TEACHER = None  # --teacher: a Teacher
+
+
 def load(samples_dir, name, splits):
-    """Patches (uint8) and updates (start -> label, computed by make_cnn_samples) of the samples in `splits`."""
+    """Patches (uint8), updates (start -> label, computed by make_cnn_samples) and per output a
+    weight (1: a label; 0: none) of the samples in `splits`. With --teacher, each expression's label
+    is the teacher's where it has a reading of the sample, else the sample's own label (the dense
+    teacher labels of the 300-W crops); a clip frame tracked by make_cnn_samples --tracked-clips has
+    no label of its own, so only the teacher's count, and a frame the teacher found no face in is dropped."""
     path = os.path.join(samples_dir, name + "_patches.npy")
     if not os.path.exists(path):
         return None
     patches = np.load(path, mmap_mode="r")
     header, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
     first = header.index("d_omega_x")
+    columns = [c[2:] for c in header[first:]]
     keep = [i for i, r in enumerate(rows) if kept(r, splits)]
-    update = torch.tensor([[float(v) for v in rows[i][first:]] for i in keep], dtype=torch.float32)
-    return torch.as_tensor(np.asarray(patches[keep])), update, [c[2:] for c in header[first:]]
+    update = np.array([[float(v) for v in rows[i][first:]] for i in keep], dtype=np.float32).reshape(len(keep), len(columns))
+    weight = np.ones_like(update)
+    names = columns[6:]
+    start_columns = [header.index(n) for n in names]
+    starts = np.array([[float(rows[i][c]) for c in start_columns] for i in keep], dtype=np.float32).reshape(len(keep), len(names))
+    if TEACHER is not None:
+        own_label = name not in ("clips", "clips_moved")  # tracked clip frames carry no label of their own
+        label_columns = [header.index("label_" + n) for n in names]
+        photographed = {}  # a warped copy's photograph: its label, by key (make_cnn_samples keys a copy "KEY@movedN")
+        copies = name in ("moved", "clips_moved")
+        if copies:
+            base_header, base_rows = read_csv(os.path.join(samples_dir, ("faces300w" if name == "moved" else "clips") + "_samples.csv"))
+            base_columns = [base_header.index("label_" + n) for n in names]
+            for r in base_rows:
+                photographed.setdefault(r[0], np.array([float(r[c]) for c in base_columns], dtype=np.float32))
+        usable = []
+        for j, i in enumerate(keep):
+            key = rows[i][0].split("@")[0]
+            teacher = TEACHER.targets(key, names)
+            if copies:
+                # The shapes expression warping changed are known exactly (in the face model's units);
+                # the others are as the teacher read the photograph.
+                label = np.array([float(rows[i][c]) for c in label_columns], dtype=np.float32)
+                moved = np.abs(label - photographed[key]) > 1e-4 if key in photographed else np.ones(len(names), bool)
+                teacher = np.full(len(names), np.nan, np.float32) if teacher is None else teacher
+                teacher[moved] = label[moved]
+            if teacher is None:
+                continue
+            seen = ~np.isnan(teacher)
+            update[j, 6:][seen] = teacher[seen] - starts[j][seen]
+            if not own_label:
+                weight[j, 6:][~seen] = 0.0
+            usable.append(j)
+        keep = [keep[j] for j in usable]
+        update, weight, starts = update[usable], weight[usable], starts[usable]
+    labels = torch.as_tensor(starts + update[:, 6:])  # the label's expressions, absolute
+    return torch.as_tensor(np.asarray(patches[keep])), torch.as_tensor(update), columns, torch.as_tensor(weight), labels
 
 
 # A landmark displacement larger than this (patch pixels) comes from a start turned nearly
 # edge-on, where the patch shows little of the face and the canonical map degenerates: not a
 # sample to learn from.
 MAX_DISPLACEMENT_PX = 24.0
-
-
-def load_labels(samples_dir, name, splits, names):
-    """The label's expressions (absolute weights, `names`' order) of the samples in `splits`, as load() keeps them."""
-    header, rows = read_csv(os.path.join(samples_dir, name + "_samples.csv"))
-    columns = [header.index("label_" + n) for n in names]
-    return torch.tensor([[float(r[c]) for c in columns] for r in rows if kept(r, splits)], dtype=torch.float32)
 
 
 def expression_agreement(pred, update, labels, names):
@@ -88,6 +185,46 @@ def expression_agreement(pred, update, labels, names):
         denominator = (a.norm() * b.norm()).item()
         out[n] = (a @ b).item() / denominator if denominator > 1e-9 else float("nan")
     return out
+
+
+def masked_agreement(estimate, labels, mask, names):
+    """Per expression, Pearson r between estimate and label over the samples that have a label."""
+    out = {}
+    for k, n in enumerate(names):
+        keep = mask[:, k] > 0
+        a, b = estimate[keep, k] - estimate[keep, k].mean(), labels[keep, k] - labels[keep, k].mean()
+        denominator = (a.norm() * b.norm()).item()
+        out[n] = (a @ b).item() / denominator if keep.sum() > 10 and denominator > 1e-9 else float("nan")
+    return out
+
+
+# A gain above this would amplify noise more than it restores response.
+MAX_GAIN = 3.0
+
+
+def gains(estimate, labels, mask, rest, names):
+    """Per expression, the gain g that brings the validation people's readings to their labels:
+    with w' = clamp((w - w0) / (1 - w0)) the reading above its rest level w0, the least-squares
+    g = sum(w' l) / sum(w'^2) over the labelled samples, clamped to [1, MAX_GAIN] (1 where a shape
+    is too rare to tell). A net regresses rare, strong expressions of new faces towards the mean;
+    this restores their size."""
+    out = {}
+    for k, n in enumerate(names):
+        keep = mask[:, k] > 0
+        w0 = min(rest[n], 0.9)
+        w = ((estimate[keep, k] - w0) / (1 - w0)).clamp(0, 1)
+        l = labels[keep, k]
+        shown = (l > 0.3).sum().item()
+        g = (w @ l).item() / max((w @ w).item(), 1e-9) if shown >= 10 else 1.0
+        out[n] = min(max(g, 1.0), MAX_GAIN)
+    return out
+
+
+def write_gains(out, values):
+    """OUT.validation_gain.txt: per expression, its gain on the validation people (pack_cnn --gain-from-validation)."""
+    with open(out + ".validation_gain.txt", "w") as f:
+        for n, v in values.items():
+            f.write(f"{n} {v:.4f}\n")
 
 
 def write_agreement(out, agreement):
@@ -226,40 +363,52 @@ def main():
     p.add_argument("--widths", default="16,32,64,96", help="the four conv blocks' channels, comma-separated")
     p.add_argument("--hidden", type=int, default=256, help="the hidden linear layer's width")
     p.add_argument("--hold-out-clips", default="", help="clips also left out of training, comma-separated parts of their names")
+    p.add_argument("--clips-per-epoch", type=float, default=1,
+                   help="draw this many times as many clip samples as 300-W samples each epoch (at most the clips' count)")
+    p.add_argument("--copies-per-epoch", type=float, default=0,
+                   help="draw this many times as many copies (profiled, warped) as 300-W samples each epoch; 0: all")
+    p.add_argument("--teacher", default="",
+                   help="with --expressions: the folder of MediaPipe's blendshape scores (../shared/data/teacher), the "
+                        "labels of the shapes it reads (class Teacher); samples from make_cnn_samples --tracked-clips")
     a = p.parse_args()
     HOLD_OUT_CLIPS.extend(c for c in a.hold_out_clips.split(",") if c)
+    if a.teacher:
+        global TEACHER
+        TEACHER = Teacher(a.teacher)
+        print("teacher rest levels: " + " ".join(f"{n} {v:.2f}" for n, v in TEACHER.rest.items() if v >= 0.03), flush=True)
     nets.setup_torch(a.threads, seed=1)
     os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
 
     loader = load_landmarks if a.landmarks else load
-    faces, profiled, moved, clips = (load_all(loader, a.samples, n, {"train"}) for n in ("faces300w", "profiled", "moved", "clips"))
-    sets = [t for t in (faces, profiled, moved, clips) if t is not None]
+    faces, profiled, moved, clips_moved, clips = (load_all(loader, a.samples, n, {"train"})
+                                                  for n in ("faces300w", "profiled", "moved", "clips_moved", "clips"))
+    sets = [t for t in (faces, profiled, moved, clips_moved, clips) if t is not None]
     columns = faces[2]
     x_train = torch.cat([t[0] for t in sets])
     y_train = torch.cat([t[1] for t in sets])
+    m_train = torch.cat([t[3] for t in sets])  # per output: 1 where the sample has a label
     # The copies, turned or with shapes moved (make_cnn_samples --profiled, --expression-copies), count as one set.
     n_faces = len(faces[0])
-    n_profiled = sum(len(t[0]) for t in (profiled, moved) if t is not None)
+    n_profiled = sum(len(t[0]) for t in (profiled, moved, clips_moved) if t is not None)
     n_clips = len(clips[0]) if clips is not None else 0
     validation = {}
-    for name in ("faces300w", "profiled"):
+    for name in ("faces300w", "profiled") + (("clips", "clips_moved") if a.teacher else ()):
         v = load_all(loader, a.samples, name, {"validation"})
         if v is None or len(v[0]) == 0:
             continue
         if not a.landmarks:  # the label's own patches count in training, not in these figures
-            perturbed = v[1][:, :6].abs().sum(1) > 0
-            v = (v[0][perturbed], v[1][perturbed])
-        labels = None
-        if a.expressions:
-            labels = torch.cat([load_labels(d, name, {"validation"}, columns[6:]) for d in a.samples.split(",")
-                                if os.path.exists(os.path.join(d, name + "_samples.csv"))])[perturbed]
-        validation[name] = (standardise(v[0]), v[1], labels)
+            # (a tracked clip's frame has no label of its own: its start is the tracker's, as at run time)
+            perturbed = v[1][:, :6].abs().sum(1) > 0 if name == "faces300w" else torch.ones(len(v[0]), dtype=torch.bool)
+            v = (v[0][perturbed], v[1][perturbed], v[2], v[3][perturbed], v[4][perturbed])
+        validation[name] = (standardise(v[0]), v[1], v[4] if a.expressions else None, v[3])
     flip_order, flip_sign = landmark_mirror_permutation(a.samples.split(",")[0], columns) if a.landmarks else mirror_permutation(columns)
     # The net regresses each output over its spread on the training targets (about 9x faster
     # to train than raw radians and depth fractions of very different sizes; export folds the
     # spread back in); the loss weighs outputs alike within pose and within expressions, the
     # expressions together a quarter as much as pose; displacements all alike.
-    scale = y_train.std(0).clamp_min(1e-3)
+    labelled = m_train.sum(0).clamp_min(1)
+    mean = (y_train * m_train).sum(0) / labelled
+    scale = ((((y_train - mean) * m_train) ** 2).sum(0) / labelled).sqrt().clamp_min(1e-3)
     if a.landmarks:
         weight = torch.ones(y_train.shape[1])
     elif a.expressions:  # 49 expressions together 20x as much as the pose's six outputs
@@ -287,7 +436,7 @@ def main():
         write_columns(a.out, columns)
         if a.expressions and "faces300w" in validation:
             net.eval()
-            x_val, y_val, labels_val = validation["faces300w"]
+            x_val, y_val, labels_val, _ = validation["faces300w"]
             write_rest_levels(a.out, rest_levels(predict(net, x_val, state.get("scale", scale)), y_val, labels_val, columns[6:]))
         print(f"wrote {a.out}.onnx", flush=True)
         return
@@ -300,23 +449,27 @@ def main():
     deadline = started + 60 * a.minutes
     while time.time() < deadline and (a.epochs <= 0 or epoch < a.epochs):
         net.train()
-        # All 300-W and profiled samples, and as many clip samples as 300-W ones (the clips are 8
-        # people, their frames alike).
+        # All 300-W samples, all copies (or --copies-per-epoch times as many as 300-W ones, drawn
+        # afresh) and --clips-per-epoch times as many clip samples as 300-W ones (a clip's frames are alike).
         start_clips = n_faces + n_profiled
-        order = torch.randperm(start_clips)
+        order = torch.randperm(n_faces)
+        copies = n_profiled if a.copies_per_epoch <= 0 else min(n_profiled, int(a.copies_per_epoch * n_faces))
+        if n_profiled:
+            order = torch.cat([order, n_faces + (torch.randperm(n_profiled)[:copies])])
         if n_clips:
-            order = torch.cat([order, start_clips + torch.randint(n_clips, (min(n_faces, n_clips),))])
+            order = torch.cat([order, start_clips + torch.randint(n_clips, (int(a.clips_per_epoch * min(n_faces, n_clips)),))])
         order = order[torch.randperm(len(order))]
         total = 0.0
         for i in range(0, len(order), a.batch):
             idx = order[i:i + a.batch]
-            x, y = standardise(x_train[idx]), y_train[idx]
+            x, y, m = standardise(x_train[idx]), y_train[idx], m_train[idx]
             flip = torch.rand(len(idx)) < 0.5
             x[flip] = x[flip].flip(3)
             y[flip] = y[flip][:, flip_order] * flip_sign
+            m[flip] = m[flip][:, flip_order]
             if torch.rand(1).item() < 0.5:  # photometric: contrast and brightness on the standardised patch
                 x = x * (0.8 + 0.4 * torch.rand(len(idx), 1, 1, 1)) + 0.2 * torch.randn(len(idx), 1, 1, 1)
-            loss = (((net(x) - y / scale) ** 2).mean(0) * weight).sum()
+            loss = ((((net(x) - y / scale) ** 2) * m).sum(0) / m.sum(0).clamp_min(1) * weight).sum()
             opt.zero_grad(); loss.backward(); opt.step()
             total += loss.item() * len(idx)
             if (i // a.batch) % 100 == 99:
@@ -327,7 +480,8 @@ def main():
         line = f"epoch {epoch} train loss {total / len(order):.4f}; validation"
         score = float("inf")
         with torch.no_grad():
-            for name, (x_val, y_val, labels_val) in validation.items():
+            readings = {}  # teacher mode: per validation set, (estimate, label, mask) of the expressions
+            for name, (x_val, y_val, labels_val, m_val) in validation.items():
                 pred = predict(net, x_val, scale)
                 if a.landmarks:  # mean point distance, patch pixels
                     before = y_val.view(len(y_val), -1, 2).norm(dim=2).mean().item()
@@ -340,11 +494,16 @@ def main():
                 rot_after = (pred[:, :3] - y_val[:, :3]).norm(dim=1) * 180 / math.pi
                 shift_before = y_val[:, 3:6].norm(dim=1).mean().item() * 100
                 shift_after = (pred[:, 3:6] - y_val[:, 3:6]).norm(dim=1).mean().item() * 100
-                expr_before = y_val[:, 6:].abs().mean().item()
-                expr_after = (pred[:, 6:] - y_val[:, 6:]).abs().mean().item()
+                m_expr = m_val[:, 6:]
+                expr_before = ((y_val[:, 6:].abs() * m_expr).sum() / m_expr.sum().clamp_min(1)).item()
+                expr_after = (((pred[:, 6:] - y_val[:, 6:]).abs() * m_expr).sum() / m_expr.sum().clamp_min(1)).item()
+                if TEACHER is not None:
+                    readings[name] = ((labels_val - y_val[:, 6:] + pred[:, 6:]).clamp(0, 1), labels_val, m_expr)
+                    if name == "faces300w":
+                        rest = rest_levels(pred, y_val, labels_val, columns[6:])
                 if name == "faces300w":
                     score = expr_after if a.expressions else rot_after.mean().item()
-                    if a.expressions:
+                    if a.expressions and TEACHER is None:
                         agreement = expression_agreement(pred, y_val, labels_val, columns[6:])
                         line += " r " + " ".join(f"{n} {agreement[n]:.2f}" for n in ("browDown_L", "browInnerUp_L", "mouthPucker", "mouthFunnel"))
                         if score < best:
@@ -353,6 +512,20 @@ def main():
                 line += (f" {name}: rotation {rot_before.mean():.2f} -> {rot_after.mean():.2f} deg (within 3 deg "
                          f"{(rot_before < 3).float().mean() * 100:.0f} -> {(rot_after < 3).float().mean() * 100:.0f} %), "
                          f"centre {shift_before:.2f} -> {shift_after:.2f} % of depth, expression MAE {expr_before:.4f} -> {expr_after:.4f};")
+        if readings:
+            # Every validation set alike: the 300-W crops, the validation people's clip frames and
+            # their warped copies.
+            score = sum(((e - l).abs() * m).sum().item() / max(m.sum().item(), 1) for e, l, m in readings.values()) / len(readings)
+            people = [readings[n] for n in ("clips", "clips_moved") if n in readings]
+            estimate, label, mask = (torch.cat([r[i] for r in people]) for i in range(3))
+            agreement = masked_agreement(estimate, label, mask, columns[6:])
+            line += f" score {score:.4f}; validation people r " + " ".join(
+                f"{n} {agreement[n]:.2f}" for n in ("jawOpen", "mouthSmile_L", "mouthPucker", "browDown_L", "browInnerUp_L", "mouthFrown_L",
+                                                    "mouthPress_L", "mouthLeft", "cheekPuff_L", "noseSneer_L"))
+            if score < best:
+                write_agreement(a.out, agreement)
+                write_rest_levels(a.out, rest)
+                write_gains(a.out, gains(estimate, label, mask, rest, columns[6:]))
         line += f" {time.time() - started:.0f} s"
         print(line, flush=True); log.write(line + "\n"); log.flush()
         torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best, "scale": scale,

@@ -9,6 +9,7 @@
 #include "app/args.hpp"
 #include "app/image_view.hpp"
 #include "cli/stats.hpp"
+#include "common/clip_splits.hpp"
 #include "common/faces300w.hpp"
 #include "common/npy_writer.hpp"
 #include "common/synthetic_face.hpp"
@@ -51,8 +52,8 @@ const char* kUsage = R"(usage: train_eyes [--out models/eye_model.ftm] [--holdou
                   [--corner-trees N] [--corner-depth D] [--corner-stages K]
                   [--corner-synthetic RENDERS] [--iris-net NET.onnx [--net-map-radius R]] [--from MODEL.ftm [--corners]]
 Trains the eye model on the teacher labels in ../shared/data/teacher. Held out from training:
-300-W validation and test, and the clips of --holdout (default: liveportrait_d14_gaze_shifts.mp4,
-fgnet_talking_face_franck.mp4). The aperture forest also learns from RENDERS synthetic renders of
+300-W validation and test, and the clips of --holdout (default: the held-out people of
+data/clip_splits.csv). The aperture forest also learns from RENDERS synthetic renders of
 the face model (default 2,500; exact classes and apertures; eval-gaze renders others), and the pixel
 forest too with --synthetic-pixels. Reports pixel accuracy and aperture error on held-out eyes.
 --samples-out DIR writes the eye patches instead, for the iris CNN (train_iris_net.py):
@@ -663,7 +664,7 @@ int main(int argc, char** argv) {
         const std::string shared = core::sharedDirectory();
         if (shared.empty()) throw Error("../shared not found: the teacher labels live there");
         const std::string out = args.get("--out", "models/eye_model.ftm");
-        const auto holdout = tools::splitList(args.get("--holdout", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
+        const auto holdout = args.has("--holdout") ? tools::splitList(args.get("--holdout")) : tools::clipsOfSplit("heldout");
         const auto start = std::chrono::steady_clock::now();
         const std::function<double()> seconds = [&] {
             return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -2,8 +2,9 @@
 // ONNX exports of tools/train/expression/train_stage.py (docs/cnn.md).
 //
 //   build/tools/pack_cnn --nets build/cnn/stage1.onnx[,stage2.onnx] --rounds 2[,1] [--landmark-net build/cnn/landmarks.onnx]
-//                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv | --rest-from-validation]
-//                                            [--min-validation-r R]]
+//                        [--expressions-only [--neutral-from build/dense_labels/faces300w.csv | --rest-from-validation
+//                                             [--gain-from-validation]]
+//                                            [--min-validation-r R [--leave-out NAME,...]]]
 //                        [--mirror-average] [--corrects-fit]
 //                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
@@ -24,8 +25,13 @@
 // not show it (the trainer's OUT.validation_rest.txt beside the last net: the estimate's 0.9
 // quantile over the crops whose label is at most the median; a pair's mean), so that a relaxed
 // face reads 0 on nine in ten such faces. --min-validation-r: only the expressions whose
-// estimate agreed with the labels on the 300-W validation crops by at least R (Pearson, the mean of
-// a left / right pair; the trainer's OUT.validation_r.txt beside the net) are reported.
+// estimate agreed with the labels on the validation data by at least R (Pearson, the mean of a
+// left / right pair; the trainer's OUT.validation_r.txt beside the net: the 300-W validation crops,
+// or with train_stage.py --teacher the validation people) are reported; --leave-out N,... names
+// expressions not reported whatever their r.
+// --gain-from-validation (with --rest-from-validation): each expression's full-expression reading
+// w1 = w0 + (1 - w0) / g, g its gain on the validation people (the trainer's OUT.validation_gain.txt;
+// a pair's mean), so that the stage reports (w - w0) / (w1 - w0) (cnn_model_data.hpp).
 // --mirror-average: the stages read each patch and its mirror image and apply the mean update
 // (cnn/update_net.hpp, refine), so that a face and its mirror image read alike; twice the nets' time.
 // --corrects-fit (with --expressions-only): the stage also corrects the shapes the fit estimates
@@ -124,15 +130,18 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 }
 
 int run(int argc, char** argv) {
-    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
-                           {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r",
-                            "--refiner", "--sides", "--base"},
-                           {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation"});
+    const tools::Args args(
+        std::vector<std::string>(argv + 1, argv + argc),
+        {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r", "--leave-out",
+         "--refiner", "--sides", "--base"},
+        {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation", "--gain-from-validation"});
     if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
         std::puts(
             "usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
-            "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R] [--refiner R.onnx]\n"
-            "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation]");
+            "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R [--leave-out N,...]]\n"
+            "                [--refiner R.onnx]\n"
+            "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation\n"
+            "                [--gain-from-validation]]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = tools::splitList(args.get("--nets", ""));
@@ -182,6 +191,7 @@ int run(int argc, char** argv) {
     if (args.has("--neutral-from") || args.has("--rest-from-validation")) {
         if (!model.expressions_only) throw Error("--neutral-from and --rest-from-validation go with --expressions-only");
         model.neutral.clear();
+        model.full.clear();  // read between the old neutral and full, or not at all
         if (args.has("--neutral-from")) {
             model.neutral = trainingMedians(args.get("--neutral-from"), model.expressions);
         } else {
@@ -193,11 +203,25 @@ int run(int argc, char** argv) {
             if (model.neutral[k] >= 0.05f) std::printf("neutral %s %.3f\n", model.expressions[k].c_str(), model.neutral[k]);
         }
     }
+    if (args.has("--gain-from-validation")) {
+        if (!args.has("--rest-from-validation")) throw Error("--gain-from-validation goes with --rest-from-validation");
+        const std::vector<double> gain = pairAveraged(nets.back(), ".validation_gain.txt", model.expressions);
+        for (std::size_t k = 0; k < model.neutral.size(); ++k) {
+            const double g = std::clamp(gain[k], 1.0, 10.0);
+            model.full.push_back(static_cast<float>(model.neutral[k] + (1.0 - model.neutral[k]) / g));
+            if (g > 1.01) std::printf("gain %s %.2f\n", model.expressions[k].c_str(), g);
+        }
+    }
     if (args.has("--min-validation-r")) {
         if (!model.expressions_only) throw Error("--min-validation-r goes with --expressions-only");
         const double minimum = args.number("--min-validation-r", 0.5);
         model.reported.clear();
         for (const double r : pairAveraged(nets.back(), ".validation_r.txt", model.expressions)) model.reported.push_back(r >= minimum);
+        for (const std::string& name : tools::splitList(args.get("--leave-out", ""))) {
+            const auto it = std::find(model.expressions.begin(), model.expressions.end(), name);
+            if (it == model.expressions.end()) throw Error("--leave-out: the nets have no expression '" + name + "'");
+            model.reported[static_cast<std::size_t>(it - model.expressions.begin())] = false;
+        }
         std::printf("reported:");
         for (std::size_t k = 0; k < model.reported.size(); ++k) {
             if (model.reported[k]) std::printf(" %s", model.expressions[k].c_str());
