@@ -151,8 +151,10 @@ private:
     std::optional<nn::PatchNet> landmark_net_;
     std::optional<UpdateMirror> mirror_;
     struct Reported {
-        int position;      ///< in the layout's expressions
-        bool neutralised;  ///< a reading the neutral applies to, not a correction of the fit's
+        int position;  ///< in the layout's expressions
+        /// Read between its neutral and full readings: a reading, or a correction of the fit's
+        /// by a net that reads every shape it reports (corrects_fit).
+        bool neutralised;
     };
     std::vector<Reported> reported_;  ///< the expressions this stage writes
 };

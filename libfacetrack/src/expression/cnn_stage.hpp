@@ -7,7 +7,8 @@
 // Reads: pose, expression, identity (the fit's). Writes: pose and the
 // cascade's expressions (the others stay as the fit left them), and landmarks
 // when the file has a landmark net; a cascade that reads only expressions
-// (CnnModel::expressionsOnly) writes only those no earlier stage estimates.
+// (CnnModel::expressionsOnly) writes those no earlier stage estimates, and
+// with corrects_fit the fit's too (the shipped file).
 // Never loses a face: the fit's checks decide that.
 
 #include "pipeline/stage.hpp"
