@@ -1,25 +1,29 @@
 #!/usr/bin/python3
 """Trains one CNN cascade stage (docs/cnn.md): from the canonical face patch at a
-start's parameters, the update to the dense teacher label's parameters (pose about the face
-centre and 49 expressions: libfacetrack/src/cnn/update_net.hpp, written by make_cnn_samples).
-The labels are MediaPipe's predictions fitted with the face model: teacher labels, not ground truth.
-With --landmarks, the cascade's last net instead: the 68 annotated 300-W points' displacements
-from the start's projected landmarks (libfacetrack/src/cnn/landmark_net.hpp), trained on the
-300-W crops and their profiled copies (the clips have no annotated points).
+start's parameters, the update to the label's parameters (pose about the face centre and 49
+expressions: libfacetrack/src/expression/update_net.hpp, written by make_cnn_samples). The labels
+are the dense teacher labels (MediaPipe's mesh fitted with the face model), and with --teacher
+MediaPipe Face Landmarker's blendshape scores and the exact shapes of expression-warped copies
+(class Teacher, load()): teacher labels, not ground truth. With --landmarks, the cascade's last
+net instead: the 68 annotated 300-W points' displacements from the start's projected landmarks
+(libfacetrack/src/expression/landmark_net.hpp), trained on the 300-W crops and their profiled
+copies (the clips have no annotated points).
 
   /usr/bin/python3 -m tools.train.expression.train_stage [--samples build/cnn_samples]
         [--out build/cnn/stage1] [--minutes 30] [--epochs N] [--resume] [--landmarks | --expressions]
-        [--hold-out-clips d3_,d10_]
+        [--teacher ../shared/data/teacher] [--copies-per-epoch K] [--clips-per-epoch K]
 
-Trains on the samples whose split is "train" (300-W train crops, their profiled copies turned
-to large yaw, their copies with shapes moved when the folder has them, training clips), each
-epoch all the 300-W samples and copies and as many clip
-samples drawn afresh, half of them mirrored (patch flipped, update mirrored, left and right
-shapes swapped); reports on the 300-W validation crops and their profiled copies; the 300-W
-test crops and the held-out clips (d14, franck) are never read.
-Logs each epoch (losses, seconds) to OUT.log, keeps OUT.pt (resumable) and OUT.best.pt (the
-epoch with the lowest rotation error, or point error, on the 300-W validation crops) and exports the best as
-OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads).
+Trains on the samples whose split is "train" (300-W train crops, their profiled or warped copies,
+the training people's clip frames and their warped copies): each epoch all the 300-W samples, the
+copies (or --copies-per-epoch times as many, drawn afresh) and --clips-per-epoch times as many
+clip samples, half of them mirrored (patch flipped, update mirrored, left and right shapes
+swapped). It reports on the 300-W validation crops and their profiled copies, and with --teacher
+on the validation people's frames and warped copies (data/clip_splits.csv); the 300-W test crops
+and the held-out people are never read. Logs each epoch to OUT.log, keeps OUT.pt (resumable) and
+OUT.best.pt (the epoch with the lowest error on the validation sets: rotation, points, or with
+--expressions the expressions) and exports the best as OUT.onnx (opset 13, eval mode, BatchNorm
+folded: what OpenCV 4.6's dnn loads); with --teacher also OUT.validation_{r,rest,gain}.txt for
+pack_cnn.
 """
 import argparse, copy, csv, math, os, sys, time
 
