@@ -230,6 +230,18 @@ int copySamplesOf(const expression::WarpLayout& layout, const LabelledImage& ima
     return sampled;
 }
 
+/// What the expression stage reads at run time: the tracker's landmarks, refiner and fit, with no
+/// cnn stage and no filter (a Tracker of these per clip).
+struct ExpressionInput {
+    explicit ExpressionInput(const std::shared_ptr<const FaceModel>& model)
+        : models{model, LandmarkModel::loadDefault(), nullptr, CnnModel::load(CnnModel::defaultPath())} {
+        config.filter.enabled = false;
+        config.cnn_stage = false;
+    }
+    Models models;
+    TrackerConfig config;
+};
+
 /// --clip-copies: warped copies (expression warping) of every `every`-th tracked frame of the
 /// training and validation clips, into the set "clips_moved".
 struct ClipCopies {
@@ -250,16 +262,13 @@ int trackedClipSamples(const std::shared_ptr<const FaceModel>& model, const expr
     for (const auto& entry : std::filesystem::directory_iterator(dir))
         if (entry.path().extension() == ".mp4") clips.push_back(entry.path().filename().string());
     std::sort(clips.begin(), clips.end());
-    TrackerConfig config;
-    config.filter.enabled = false;
-    config.cnn_stage = false;
-    const Models models{model, LandmarkModel::loadDefault(), nullptr, CnnModel::load(CnnModel::defaultPath())};
+    const ExpressionInput input(model);
     int frames = 0;
     for (std::size_t c = 0; c < clips.size(); ++c) {
         cv::VideoCapture video(dir + "/" + clips[c]);
         if (!video.isOpened()) throw Error("cannot open clip " + clips[c]);
         const double fps = video.get(cv::CAP_PROP_FPS) > 0 ? video.get(cv::CAP_PROP_FPS) : 30.0;
-        Tracker tracker(models, config);
+        Tracker tracker(input.models, input.config);
         FrameResult result;
         cv::Mat bgr, grey;
         for (int f = 0; video.read(bgr); ++f) {
@@ -312,14 +321,11 @@ void writeWarpSheet(const std::shared_ptr<const FaceModel>& model, const express
         cv::putText(captions, shown[g], {kSize * static_cast<int>(g + 1) + 4, 12}, cv::FONT_HERSHEY_SIMPLEX, 0.33, cv::Scalar(0), 1,
                     cv::LINE_AA);
     rows.push_back(captions);
-    TrackerConfig config;
-    config.filter.enabled = false;
-    config.cnn_stage = false;
-    const Models models{model, LandmarkModel::loadDefault(), nullptr, CnnModel::load(CnnModel::defaultPath())};
+    const ExpressionInput input(model);
     for (const auto& [clip, at] : frames) {
         cv::VideoCapture video(tools::faces300wRoot("") + "/../clips/" + clip);
         if (!video.isOpened()) throw Error("cannot open clip " + clip);
-        Tracker tracker(models, config);
+        Tracker tracker(input.models, input.config);
         FrameResult result;
         cv::Mat bgr, grey;
         for (int f = 0; f <= at && video.read(bgr); ++f) {
