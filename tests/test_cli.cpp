@@ -1,5 +1,6 @@
 // Runs the installed-to-be `facetrack` binary as a user would.
 
+#include "facetrack/calibration.hpp"
 #include "nn/cnn_model_data.hpp"
 #include "test_support.hpp"
 
@@ -121,6 +122,55 @@ TEST(Cli, TrackOnAClipNumbersFramesAndGivesLandmarks) {
     }
 }
 
+// calibrate writes a profile from a clip's labelled segments; track --profile applies it: each
+// weight is calibrated() of the uncalibrated one (the same mean face in both runs, so that only
+// the calibration differs); the file reads back byte for byte; a truncated one is a clear error.
+TEST(Cli, CalibrateWritesAProfileThatTrackApplies) {
+    FACETRACK_REQUIRE_SHARED();
+    if (!std::filesystem::exists(test::sourceDir() + "/models/landmarks_lbf.ftm")) GTEST_SKIP() << "no models";
+    const std::string clip = test::sharedDir() + "/data/clips/liveportrait_d10_expressions.mp4";
+    const std::string profile = test::tempPath("calibrate") + "/profile.json";
+    const CliRun calibrate = runCli("calibrate --input '" + clip + "' --labels '" + test::sourceDir() +
+                                    "/data/expression_labels.csv' --profile '" + profile + "'");
+    ASSERT_EQ(calibrate.exit_code, 0) << calibrate.err;
+    EXPECT_NE(calibrate.out.find("pucker"), std::string::npos) << calibrate.out;
+    Calibration c = loadCalibration(profile);
+    const ShapeCalibration& pucker = c.shapes[static_cast<std::size_t>(arkitIndex("mouthPucker"))];
+    EXPECT_GT(pucker.full, pucker.neutral + 0.1f);  // the labelled pucker gave it a range
+    EXPECT_LT(pucker.full, 1.f);
+    EXPECT_FALSE(c.identity.empty());
+    c.identity.clear();  // the mean face in both runs below
+    saveCalibration(c, profile);
+    std::ifstream saved(profile);
+    const std::string text((std::istreambuf_iterator<char>(saved)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(toJson(loadCalibration(profile)), text);
+
+    const std::string common = "track '" + clip + "' --frames 40 --calibration-frames 0 --profile ";
+    const CliRun plain = runCli(common + "none"), withProfile = runCli(common + "'" + profile + "'");
+    ASSERT_EQ(plain.exit_code, 0) << plain.err;
+    ASSERT_EQ(withProfile.exit_code, 0) << withProfile.err;
+    EXPECT_NE(withProfile.err.find("calibration profile " + profile), std::string::npos) << withProfile.err;
+    const auto before = jsonLines(plain.out), after = jsonLines(withProfile.out);
+    ASSERT_EQ(before.size(), after.size());
+    int changed = 0;
+    for (std::size_t f = 0; f < before.size(); ++f) {
+        for (std::size_t k = 0; k < c.shapes.size(); ++k) {
+            const std::string name(arkitNames()[k]);
+            const float w = before[f]["blendshapes"][name].get<float>(), w1 = after[f]["blendshapes"][name].get<float>();
+            EXPECT_NEAR(w1, calibrated(c.shapes[k], w), 0.011f + 0.006f / (c.shapes[k].full - c.shapes[k].neutral))
+                << name << " frame " << f;  // both rounded to 1/100
+            changed += std::fabs(w1 - w) > 0.02f;
+        }
+    }
+    EXPECT_GT(changed, 40);
+
+    std::ofstream(profile, std::ios::trunc) << text.substr(0, text.size() / 2);
+    const CliRun truncated = runCli(common + "'" + profile + "'");
+    EXPECT_EQ(truncated.exit_code, 1);
+    EXPECT_NE(truncated.err.find(profile + ": calibration: not valid JSON"), std::string::npos) << truncated.err;
+    std::filesystem::remove_all(test::tempPath("calibrate"));
+}
+
 TEST(Cli, TrackWritesAnOverlayVideoAndBenchWritesAPlot) {
     FACETRACK_REQUIRE_SHARED();
     const std::string clip = test::sharedDir() + "/data/clips/liveportrait_d3_frown_surprise.mp4";
@@ -216,7 +266,9 @@ TEST_P(EveryOption, RefusesBadValuesBeforeOpeningAnything) {
                 last = line;
             }
             EXPECT_EQ(last.rfind(prefix, 0), 0u) << what << ": " << run.err;
-            const bool outputPath = option == "--out" || option == "--overlay" || option == "--plot" || option == "--points-out";
+            // (--profile is calibrate's output.)
+            const bool outputPath = option == "--out" || option == "--overlay" || option == "--plot" || option == "--points-out" ||
+                                    (option == "--profile" && std::string(command.name) == "calibrate");
             if (value == "nan" && !outputPath) {
                 EXPECT_EQ(run.err.find("/nonexistent"), std::string::npos)
                     << what << ": the input was opened before the option was checked: " << run.err;
@@ -234,7 +286,8 @@ INSTANTIATE_TEST_SUITE_P(Cli, EveryOption,
                                          CommandUnderTest{"eval-track", "/nonexistent/a.mp4"},
                                          CommandUnderTest{"eval-gaze", "--clips /nonexistent/a.mp4 --split none --synthetic 0"},
                                          CommandUnderTest{"eval-expressions", "/nonexistent/a.mp4"},
-                                         CommandUnderTest{"send", "--input /nonexistent/a.mp4 --protocol vmc"}),
+                                         CommandUnderTest{"send", "--input /nonexistent/a.mp4 --protocol vmc"},
+                                         CommandUnderTest{"calibrate", "--input /nonexistent/a.mp4 --neutral-at 0"}),
                          [](const testing::TestParamInfo<CommandUnderTest>& info) {
                              std::string name = info.param.name;
                              std::replace(name.begin(), name.end(), '-', '_');

@@ -1,7 +1,7 @@
 // The Tracker's stage machinery with fake stages and a fake detector, in the
 // style of MediaPipe's CalculatorRunner: no models, no images with faces.
 
-#include "neutral/neutral_stage.hpp"
+#include "calibration/calibration_stage.hpp"
 #include "pipeline/stage.hpp"
 #include "track/tracker_core.hpp"
 
@@ -416,44 +416,50 @@ TEST_F(StageRunner, NullStagesAndDetectorsAreRefused) {
     EXPECT_THROW(track::TrackerCore(nullptr, {}, {}), Error);
 }
 
-// The neutral stage alone: weights relative to the neutral, w' = (w - w0) / (1 - w0),
-// the neutral taken from what the stage was given (not what it reported), the
-// eyes' look directions left alone.
-TEST(NeutralStage, MeasuresFromTheNeutralItWasGivenAndLeavesTheGazeAlone) {
+// The calibration stage alone: each ARKit weight through calibrated(), the
+// native weights relative to their neutral, a neutral captured from what the
+// stage was given (not what it reported), the eyes' look directions left alone.
+TEST(CalibrationStage, AppliesTheCalibrationAndCapturesTheNeutralItWasGiven) {
     const auto model = FaceModel::load(test::shippedFaceModel());
-    const auto stage = neutral::makeNeutralStage(model);
+    const auto stage = calibration::makeCalibrationStage(model);
     EXPECT_TRUE(stage->contract().reads == pipeline::Field::Expression);
     const auto state = stage->newFaceState();
-    const auto index = [](const char* name) {
-        return static_cast<std::size_t>(std::find(arkitNames().begin(), arkitNames().end(), std::string_view(name)) - arkitNames().begin());
-    };
-    const std::size_t smile = index("mouthSmileLeft"), look = index("eyeLookInLeft");
-    ASSERT_LT(smile, arkitNames().size());
-    ASSERT_LT(look, arkitNames().size());
+    const auto smile = static_cast<std::size_t>(arkitIndex("mouthSmileLeft")), look = static_cast<std::size_t>(arkitIndex("eyeLookInLeft"));
     const cv::Mat gray(8, 8, CV_8UC1, cv::Scalar(0));
     const pipeline::FrameInput frame{{}, gray, {}, 1.0 / 30};
     pipeline::FaceTrack face;
     const auto run = [&](float smileWeight) {
         face.result.expression.emplace();
         face.result.expression->native.assign(model->expressionNames().size(), 0.f);
+        face.result.expression->native[0] = smileWeight;
         face.result.expression->arkit[smile] = smileWeight;
         face.result.expression->arkit[look] = 0.3f;
         EXPECT_EQ(stage->run(frame, face, state.get()), pipeline::Outcome::Ok);
-        return face.result.expression->arkit;
+        return *face.result.expression;
     };
-    EXPECT_FLOAT_EQ(run(0.2f)[smile], 0.2f);  // no neutral yet: as given
-    stage->calibrateNeutral(state.get(), true);
-    EXPECT_FLOAT_EQ(run(0.2f)[smile], 0.f);
-    auto w = run(0.6f);
-    EXPECT_FLOAT_EQ(w[smile], 0.5f);
-    EXPECT_FLOAT_EQ(w[look], 0.3f);
-    EXPECT_FLOAT_EQ(run(0.1f)[smile], 0.f);  // below the neutral: clamped
-    run(0.6f);
-    stage->calibrateNeutral(state.get(), true);  // from the 0.6 given, not the 0.5 reported
-    EXPECT_FLOAT_EQ(run(0.6f)[smile], 0.f);
-    EXPECT_FLOAT_EQ(run(0.8f)[smile], 0.5f);
-    stage->calibrateNeutral(state.get(), false);
-    EXPECT_FLOAT_EQ(run(0.6f)[smile], 0.6f);
+    EXPECT_FLOAT_EQ(run(0.2f).arkit[smile], 0.2f);  // no calibration: as given
+    Calibration calibration;
+    stage->captureNeutral(state.get(), calibration);
+    EXPECT_FLOAT_EQ(calibration.shapes[smile].neutral, 0.2f);
+    EXPECT_FLOAT_EQ(calibration.shapes[look].neutral, 0.f);  // the look directions keep theirs
+    ASSERT_EQ(calibration.native_neutral.size(), model->expressionNames().size());
+    EXPECT_FLOAT_EQ(calibration.native_neutral[0], 0.2f);
+    calibration.shapes[smile].full = 0.6f;
+    stage->setCalibration(calibration, {state.get()});
+    EXPECT_FLOAT_EQ(run(0.2f).arkit[smile], 0.f);
+    auto w = run(0.4f);
+    EXPECT_FLOAT_EQ(w.arkit[smile], 0.5f);      // half way from the neutral to the full
+    EXPECT_FLOAT_EQ(w.native[0], 0.2f / 0.8f);  // native: from the neutral to 1
+    EXPECT_FLOAT_EQ(w.arkit[look], 0.3f);
+    EXPECT_FLOAT_EQ(run(0.1f).arkit[smile], 0.f);  // below the neutral: clamped
+    EXPECT_FLOAT_EQ(run(0.9f).arkit[smile], 1.f);  // beyond the full: clamped
+    run(0.4f);
+    stage->captureNeutral(state.get(), calibration);  // from the 0.4 given, not the 0.5 reported
+    EXPECT_FLOAT_EQ(calibration.shapes[smile].neutral, 0.4f);
+    stage->setCalibration(Calibration{}, {state.get()});
+    EXPECT_FLOAT_EQ(run(0.6f).arkit[smile], 0.6f);
+    calibration.native_neutral.resize(3);  // not the face model's
+    EXPECT_THROW(stage->setCalibration(calibration, {state.get()}), Error);
 }
 
 TEST(TrackerApi, TakesTheApplicationsOwnDetector) {

@@ -20,9 +20,14 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <opencv2/videoio.hpp>
+
+#include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <sstream>
+#include <thread>
 
 namespace facetrack {
 namespace {
@@ -247,26 +252,26 @@ TEST(Vmc, AFrameIsBundlesWithinTheLimitBonesThenBlendsThenApplyOkAndTime) {
         EXPECT_EQ(messages[n - 3].address, "/VMC/Ext/Blend/Apply");
         EXPECT_EQ(messages[n - 3].types, "");
         EXPECT_EQ(messages[n - 2].address, "/VMC/Ext/OK");
-        EXPECT_EQ(messages[n - 2].ints, std::vector<int>{1});
+        EXPECT_EQ(messages[n - 2].ints, (std::vector<int>{1, 3, 0, 1}));  // loaded, calibrated, normal mode, tracking
         EXPECT_EQ(messages[n - 1].address, "/VMC/Ext/T");
         EXPECT_EQ(messages[n - 1].floats, std::vector<float>{0.5f + static_cast<float>(f)});
     }
 }
 
 TEST(Vmc, BytesFollowOsc10) {
-    // /VMC/Ext/OK with int 1: address padded to 4, type tag ",i" padded, big-endian int.
+    // /VMC/Ext/OK with ints 1 3 0 0: address padded to 4, type tag ",iiii" padded, big-endian ints.
     FaceResult none;
     std::vector<std::vector<char>> datagrams;
-    encodeVmc(nullptr, 2.0, datagrams);
+    encodeVmc(nullptr, false, 2.0, datagrams);
     ASSERT_EQ(datagrams.size(), 1u);
     const std::string d(datagrams[0].begin(), datagrams[0].end());
-    const std::string ok = std::string("/VMC/Ext/OK\0,i\0\0\0\0\0\x01", 20);
+    const std::string ok = std::string("/VMC/Ext/OK\0,iiii\0\0\0\0\0\0\x01\0\0\0\x03\0\0\0\0\0\0\0\0", 36);
     EXPECT_NE(d.find(ok), std::string::npos);
     // 2.0f big-endian is 40 00 00 00, after "/VMC/Ext/T\0\0" ",f\0\0".
     EXPECT_NE(d.find(std::string("/VMC/Ext/T\0\0,f\0\0\x40\0\0\0", 20)), std::string::npos);
     // The Apply message has no arguments but still its type tag ",".
     none.expression = ExpressionResult{};
-    encodeVmc(&none, 0.0, datagrams);
+    encodeVmc(&none, true, 0.0, datagrams);
     std::string all;
     for (const auto& g : datagrams) all.append(g.begin(), g.end());
     EXPECT_NE(all.find(std::string("/VMC/Ext/Blend/Apply\0\0\0\0,\0\0\0", 28)), std::string::npos);
@@ -360,9 +365,13 @@ TEST(IFacialMocap, WithoutAHandshakeSendsToTheGivenAddressAndNeverRepeatsAFrame)
         EXPECT_EQ(parseIfm(text, '-').shapes.size(), 52u);  // v1 separator
         previous = text;
     }
-    sender.send(FrameResult{}, 0.0);  // no face: nothing
-    app.shortTimeout();
-    EXPECT_TRUE(app.receive().empty());
+    // No face: the avatar eases to rest, and holds there.
+    sender.send(FrameResult{}, 1.0);
+    EXPECT_FALSE(app.receive().empty());
+    sender.send(FrameResult{}, 1.0 + kFaceLossEaseSeconds);
+    const IfmFrame rest = parseIfm(app.receive(), '-');
+    ASSERT_EQ(rest.shapes.size(), 52u);
+    for (const auto& [name, value] : rest.shapes) EXPECT_EQ(value, 0) << name;
 }
 
 // --- OpenSeeFace ----------------------------------------------------------
@@ -495,6 +504,202 @@ TEST(SendCommand, StreamsAClipToAReceiver) {
     const test::CommandRun bad = test::runCommand(FACETRACK_CLI, "send --input x.mp4 --protocol carrier-pigeon");
     EXPECT_EQ(bad.exit_code, 1);
     EXPECT_NE(bad.err.find("unknown protocol 'carrier-pigeon'"), std::string::npos) << bad.err;
+}
+
+// --- several protocols, a lost face ---------------------------------------
+
+TEST(Destinations, OneHostForAllOrOnePerProtocol) {
+    auto d = parseDestinations("vmc", "");
+    ASSERT_EQ(d.size(), 1u);
+    EXPECT_EQ(d[0].to, "127.0.0.1");
+    d = parseDestinations("vmc", "10.0.0.2:39540");
+    EXPECT_EQ(d[0].to, "10.0.0.2:39540");
+    d = parseDestinations("vmc,ifacialmocap,openseeface", "10.0.0.2,openseeface=10.0.0.3:11600");
+    ASSERT_EQ(d.size(), 3u);
+    EXPECT_EQ(d[0].protocol, Protocol::Vmc);
+    EXPECT_EQ(d[0].to, "10.0.0.2");
+    EXPECT_EQ(d[1].to, "10.0.0.2");
+    EXPECT_EQ(d[2].protocol, Protocol::OpenSeeFace);
+    EXPECT_EQ(d[2].to, "10.0.0.3:11600");
+    const auto says = [](const char* protocols, const char* to, const char* what) {
+        try {
+            parseDestinations(protocols, to);
+            ADD_FAILURE() << protocols << " / " << to << " accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    says("vmc,vmc", "", "given twice");
+    says("vmc,osc", "", "unknown protocol 'osc'");
+    says("vmc,openseeface", "127.0.0.1:5000", "one port for several protocols");
+    says("vmc", "ifacialmocap=127.0.0.1", "which --protocol does not send");
+    says("vmc", "a,b", "two hosts");
+}
+
+/// A frame whose one face smiles `smile`, turned `yawDeg` about the camera's y axis, eyes at `openness`.
+FrameResult faceFrame(float smile, float yawDeg, float openness) {
+    FrameResult frame;
+    FaceResult& face = frame.faces.emplace_back();
+    face.expression.emplace();
+    face.expression->arkit[static_cast<std::size_t>(arkitIndex("mouthSmileLeft"))] = smile;
+    face.expression->native.assign(5, smile);
+    const Eigen::Quaternionf q = Eigen::Quaternionf(
+                                     Eigen::AngleAxisf(yawDeg * static_cast<float>(M_PI) / 180.f, Eigen::Vector3f::UnitY())) *
+                                 Eigen::Quaternionf(0, 1, 0, 0);
+    face.pose = poseFromRest(Eigen::Quaternionf::Identity());
+    face.pose->rotation = {q.w(), q.x(), q.y(), q.z()};
+    face.pose->euler_deg = {0.f, yawDeg, 0.f};
+    face.gaze.emplace();
+    face.gaze->left.openness = face.gaze->right.openness = openness;
+    face.gaze->left.direction = face.gaze->right.direction = {0.f, 0.f, -1.f};
+    return frame;
+}
+
+float angleFromFrontalDeg(const Quaternion& q) {
+    return eigen(q).angularDistance(Eigen::Quaternionf(0, 1, 0, 0)) * 180.f / static_cast<float>(M_PI);
+}
+
+// Lost: from the last face to rest in 0.5 s, then held; found: eased in over 0.5 s, then the face as tracked.
+TEST(FaceLossEasing, RelaxesALostFaceThenEasesTheReturningFaceIn) {
+    FaceLossEasing easing;
+    const std::size_t smile = static_cast<std::size_t>(arkitIndex("mouthSmileLeft"));
+    EXPECT_EQ(easing.update(FrameResult{}, 0.0), nullptr);  // nothing seen yet
+    const FrameResult tracked = faceFrame(0.8f, 30.f, 0.2f);
+    double t = 1.0;
+    const FaceResult* out = easing.update(tracked, t);
+    ASSERT_NE(out, nullptr);
+    EXPECT_TRUE(easing.tracking());
+    EXPECT_EQ(out->expression->arkit[smile], 0.8f);  // the first face as it is
+    float lastSmile = 0.8f, lastTurn = 30.f;
+    for (int f = 1; f <= 20; ++f) {  // lost, at 30 fps
+        t = 1.0 + f / 30.0;
+        out = easing.update(FrameResult{}, t);
+        ASSERT_NE(out, nullptr);
+        EXPECT_FALSE(easing.tracking());
+        const float w = out->expression->arkit[smile], turn = angleFromFrontalDeg(out->pose->rotation);
+        EXPECT_LE(w, lastSmile);
+        EXPECT_LE(turn, lastTurn + 1e-3f);
+        if (f == 1) {
+            EXPECT_GT(w, 0.75f);  // a smooth start, not a jump
+        }
+        if (t - (1.0 + 1 / 30.0) >= kFaceLossEaseSeconds - 1e-9) {  // since the first frame without the face
+            EXPECT_EQ(w, 0.f) << "at " << t - 1.0 << " s";
+            EXPECT_LT(turn, 0.01f);
+            EXPECT_EQ(out->gaze->left.openness, 1.f);
+            EXPECT_EQ(out->pose->translation_mm.z, 600.f);  // where the head was
+        }
+        lastSmile = w;
+        lastTurn = turn;
+    }
+    // Found again: eased in from rest, then exactly the tracked face.
+    t += 1.0 / 30.0;
+    out = easing.update(tracked, t);
+    EXPECT_TRUE(easing.tracking());
+    EXPECT_LT(out->expression->arkit[smile], 0.1f);
+    out = easing.update(tracked, t + 0.25);
+    EXPECT_NEAR(out->expression->arkit[smile], 0.4f, 0.01f);  // half way at half the time
+    out = easing.update(tracked, t + 0.5);
+    EXPECT_EQ(out->expression->arkit[smile], 0.8f);
+    EXPECT_EQ(out->pose->rotation.w, tracked.faces[0].pose->rotation.w);
+    // The matrices follow the eased rotation.
+    out = easing.update(FrameResult{}, t + 0.6);
+    out = easing.update(FrameResult{}, t + 0.8);
+    EXPECT_NEAR(out->pose->camera_from_model[0],
+                1.f - 2.f * (out->pose->rotation.y * out->pose->rotation.y + out->pose->rotation.z * out->pose->rotation.z), 1e-5f);
+    EXPECT_EQ(out->pose->gl_model_view[13], -out->pose->camera_from_model[13]);
+}
+
+/// Every datagram a Receiver gets while it runs, on a thread of its own (a run
+/// of the CLI would fill the socket's buffer before the test could read it).
+class Collector {
+public:
+    Collector() {
+        receiver_.shortTimeout();
+        thread_ = std::thread([this] {
+            while (!stop_) {
+                std::string d = receiver_.receive();
+                if (!d.empty()) datagrams_.push_back(std::move(d));
+            }
+        });
+    }
+    ~Collector() { finish(); }
+    std::string address() const { return receiver_.address(); }
+    /// Waits for the stragglers and stops.
+    const std::vector<std::string>& finish() {
+        if (thread_.joinable()) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(300));
+            stop_ = true;
+            thread_.join();
+        }
+        return datagrams_;
+    }
+
+private:
+    Receiver receiver_;
+    std::atomic<bool> stop_{false};
+    std::vector<std::string> datagrams_;
+    std::thread thread_;
+};
+
+// One run sends VMC, iFacialMocap and OpenSeeFace at once; the face leaves the
+// frame after 30 frames: VMC's tracking status drops to 0 on the first frame
+// without it and the avatar's weights are at rest within 0.6 s.
+TEST(SendCommand, ThreeProtocolsAtOnceAndAFaceThatLeaves) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string clip = ::testing::TempDir() + "facetrack_face_leaves.avi";
+    {
+        cv::VideoWriter writer(clip, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 30.0, cv::Size(400, 300));
+        ASSERT_TRUE(writer.isOpened());
+        const auto frames = test::clipFrames(30);
+        for (const auto& f : frames) writer.write(f);
+        for (int i = 0; i < 30; ++i) writer.write(cv::Mat(frames[0].size(), CV_8UC3, cv::Scalar(0, 0, 0)));
+    }
+    Collector vmc, ifm, osf;
+    const test::CommandRun run = test::runCommand(
+        FACETRACK_CLI, "send --input '" + clip + "' --protocol vmc,ifacialmocap,openseeface --fast --profile none --listen-port " +
+                           std::to_string(freePort()) + " --to vmc=" + vmc.address() + ",ifacialmocap=" + ifm.address() +
+                           ",openseeface=" + osf.address());
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    std::remove(clip.c_str());
+    // A sender busy when two results came takes the newer (as with a camera): under load a few are skipped.
+    long sent = 0, withFace = 0;
+    ASSERT_EQ(std::sscanf(run.err.c_str() + run.err.rfind("facetrack send: ", run.err.find("frames sent")),
+                          "facetrack send: %ld frames sent (a face in %ld)", &sent, &withFace),
+              2)
+        << run.err;
+    EXPECT_GE(sent, 50);
+
+    struct VmcFrame {
+        float time = 0.f, largest = 0.f;
+        int tracking = -1;
+    };
+    std::vector<VmcFrame> frames(1);
+    for (const auto& d : vmc.finish()) {
+        for (const auto& m : decodeBundle(d)) {
+            if (m.address == "/VMC/Ext/Blend/Val") frames.back().largest = std::max(frames.back().largest, m.floats.at(0));
+            if (m.address == "/VMC/Ext/OK") frames.back().tracking = m.ints.size() == 4 ? m.ints[3] : -1;
+            if (m.address == "/VMC/Ext/T") {
+                frames.back().time = m.floats.at(0);
+                frames.emplace_back();
+            }
+        }
+    }
+    frames.pop_back();
+    ASSERT_EQ(static_cast<long>(frames.size()), sent);
+    const double faceLeaves = 30 / 30.0;
+    for (const VmcFrame& f : frames) {
+        EXPECT_EQ(f.tracking, f.time < faceLeaves - 1e-3 ? 1 : 0) << "at " << f.time << " s";
+        if (f.time >= faceLeaves + 0.6 - 1e-3) {
+            EXPECT_EQ(f.largest, 0.f) << "at " << f.time << " s";
+        }
+    }
+    EXPECT_GT(frames.front().largest, 0.05f);  // the face showed some expression before it left
+    EXPECT_EQ(frames.back().largest, 0.f);
+
+    EXPECT_EQ(static_cast<long>(ifm.finish().size()), sent);  // the avatar easing to rest is sent too
+    const auto& osfPackets = osf.finish();
+    EXPECT_EQ(static_cast<long>(osfPackets.size()), withFace);  // OpenSeeFace: no packet without a face
+    for (const auto& p : osfPackets) EXPECT_EQ(p.size() % kOpenSeeFaceFaceBytes, 0u);
 }
 
 }  // namespace

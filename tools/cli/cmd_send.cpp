@@ -20,16 +20,21 @@ namespace facetrack::cli {
 
 namespace {
 
-const char* kUsage = R"(usage: facetrack send (--camera /dev/videoN | --input CLIP|DIR) --protocol vmc|ifacialmocap|openseeface
-                      [--to HOST[:PORT]] [--listen-port P] [--frames N] [--fast]
-                      [--size WxH] [--fps F] [tracker options]
-Tracks on its own thread and sends every tracked frame to an avatar app over UDP:
+const char* kUsage = R"(usage: facetrack send (--camera /dev/videoN | --input CLIP|DIR) --protocol PROTOCOL[,PROTOCOL...]
+                      [--to HOST[:PORT] | --to PROTOCOL=HOST[:PORT],...] [--listen-port P] [--frames N]
+                      [--fast] [--size WxH] [--fps F] [--profile FILE|none] [tracker options]
+Tracks on its own thread and sends every tracked frame to avatar apps over UDP, in one or
+more protocols at once (--protocol vmc,openseeface):
   vmc            VMC protocol (OSC): Perfect Sync and VRM blend shapes, Head/Neck/eye bones
                  (VSeeFace, VNyan, Warudo, VMagicMirror, EVMC4U; default port 39539)
   ifacialmocap   iFacialMocap's text protocol (default port 49983); answers a receiver's
                  handshake heard on --listen-port (default 49983)
   openseeface    OpenSeeFace's 1785-byte binary packet per face (default port 11573)
---to defaults to 127.0.0.1 on the protocol's port. A clip plays at its own rate, dropping
+--to defaults to 127.0.0.1 on each protocol's port; --to HOST sends every protocol to HOST,
+--to vmc=HOST:PORT,openseeface=HOST2 each to its own. When the face is lost, VMC says so
+(/VMC/Ext/OK tracking status 0) and VMC and iFacialMocap ease the avatar to rest over 0.5 s;
+OpenSeeFace sends nothing. --profile applies a calibration profile ('facetrack calibrate'; by
+default the user's, when there is one; none: no calibration). A clip plays at its own rate, dropping
 frames the tracker is too slow for, as a camera would; --fast tracks every frame as fast as
 possible. --size and --fps are what the camera is asked for (default 640x480, 30).
 Sending never waits on the network: a receiver that is not there costs nothing. Ctrl+C
@@ -68,15 +73,16 @@ std::unique_ptr<FrameSource> openSource(const Args& args, const CaptureSettings&
 }  // namespace
 
 int runSend(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--camera", "--input", "--protocol", "--to", "--listen-port", "--frames", "--size", "--fps"}),
-                    trackingFlags({"--help", "--fast"}));
+    const Args args(
+        argv, trackingOptions({"--camera", "--input", "--protocol", "--to", "--listen-port", "--frames", "--size", "--fps", "--profile"}),
+        trackingFlags({"--help", "--fast"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
     }
     if (!args.positional().empty()) throw Error("unexpected '" + args.positional()[0] + "' (see --help)");
-    if (!args.has("--protocol")) throw Error("give --protocol vmc|ifacialmocap|openseeface");
-    const send::Protocol protocol = send::parseProtocol(args.get("--protocol"));
+    if (!args.has("--protocol")) throw Error("give --protocol vmc|ifacialmocap|openseeface (or several, comma-separated)");
+    const std::vector<send::Destination> destinations = send::parseDestinations(args.get("--protocol"), args.get("--to"));
     const long maxFrames = static_cast<long>(args.integer("--frames", -1));
     std::optional<int> listenPort;
     if (args.has("--listen-port")) listenPort = args.integer("--listen-port", 0);
@@ -85,14 +91,19 @@ int runSend(const std::vector<std::string>& argv) {
     const TrackerConfig config = trackerConfig(args);
 
     Models models = trackingModels(args);
-    send::Sender sender(protocol, args.get("--to", "127.0.0.1"), models.face, listenPort);
+    std::vector<std::unique_ptr<send::Sender>> senders;
+    std::string sending;
+    for (const auto& d : destinations) {
+        senders.push_back(std::make_unique<send::Sender>(d.protocol, d.to, models.face, listenPort));
+        sending += std::string(sending.empty() ? "" : ", ") + send::protocolName(d.protocol) + " to " + senders.back()->destination();
+    }
     AsyncOptions options;
     options.realtime = !args.has("--fast");
+    options.calibration = tools::userCalibration(args);
     auto source = openSource(args, camera);
     const std::string sourceName = source->describe();
     AsyncTracker tracking(std::move(models), config, std::move(source), options);
-    std::fprintf(stderr, "facetrack send: %s from %s to %s (Ctrl+C stops)\n", send::protocolName(protocol), sourceName.c_str(),
-                 sender.destination().c_str());
+    std::fprintf(stderr, "facetrack send: from %s, %s (Ctrl+C stops)\n", sourceName.c_str(), sending.c_str());
 
     std::signal(SIGINT, onInterrupt);
     std::signal(SIGTERM, onInterrupt);
@@ -100,13 +111,14 @@ int runSend(const std::vector<std::string>& argv) {
     const double cpuStart = cpuSeconds();
     AsyncResult latest;
     std::vector<double> latencyMs;
-    long withFace = 0;
-    while (!g_interrupted && (maxFrames < 0 || sender.stats().frames < maxFrames)) {
+    long withFace = 0, frames = 0;
+    while (!g_interrupted && (maxFrames < 0 || frames < maxFrames)) {
         if (!tracking.waitForNewer(latest, 0.2)) {
             if (tracking.stats().finished) break;
             continue;
         }
-        sender.send(latest.result, latest.time_s);
+        for (auto& sender : senders) sender->send(latest.result, latest.time_s);
+        ++frames;
         latencyMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - latest.arrival).count());
         withFace += latest.result.faces.empty() ? 0 : 1;
     }
@@ -116,11 +128,16 @@ int runSend(const std::vector<std::string>& argv) {
 
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const AsyncStats t = tracking.stats();
-    const send::SenderStats& s = sender.stats();
+    send::SenderStats s;
+    for (const auto& sender : senders) {
+        s.datagrams += sender->stats().datagrams;
+        s.bytes += sender->stats().bytes;
+        s.failed += sender->stats().failed;
+    }
     std::fprintf(stderr,
                  "facetrack send: %ld frames sent (a face in %ld) in %.1f s, %ld datagrams, %ld bytes, %ld not sent; "
                  "read %ld, dropped %ld; capture to sent p50 %.2f ms, p99 %.2f ms; CPU %.0f %% of one core\n",
-                 s.frames, withFace, wall, s.datagrams, s.bytes, s.failed, t.frames_read, t.frames_dropped, percentile(latencyMs, 0.5),
+                 frames, withFace, wall, s.datagrams, s.bytes, s.failed, t.frames_read, t.frames_dropped, percentile(latencyMs, 0.5),
                  percentile(latencyMs, 0.99), wall > 0 ? 100.0 * (cpuSeconds() - cpuStart) / wall : 0.0);
     if (!t.error.empty()) throw Error(t.error);
     return 0;

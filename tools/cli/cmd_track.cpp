@@ -20,14 +20,16 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage = R"(usage: facetrack track [CLIP|DIR|IMAGE | --camera /dev/videoN] [--out results.jsonl] [--overlay out.mp4]
-                       [--frames N] [--raw] [--neutral-at SECONDS] [tracker options]
+                       [--frames N] [--raw] [--neutral-at SECONDS] [--profile FILE|none] [tracker options]
 Runs the tracker and writes one JSON line per frame (to stdout, or --out):
   {"frame": N, "time_s": t, "tracked": b, "id": i, "detected": b, "confidence": c, "fit_residual": r,
    "box": [x0,y0,x1,y1], "landmarks": [[x,y] x 68], "pose": {"quaternion": [w,x,y,z],
    "euler_deg": [pitch,yaw,roll], "translation_mm": [x,y,z]}, "blendshapes": {52 ARKit names: w},
    "gaze": ..., "identity_calibrated": b, "timings_ms": {"detect": ms, "landmarks": ms, ...}}
---neutral-at S takes the face's expression at S seconds as its neutral (Tracker::calibrateNeutral):
-the weights after it are measured from there.
+--profile FILE applies a calibration profile ('facetrack calibrate' writes one); without it the
+user's default profile ($XDG_CONFIG_HOME/facetrack/profile.json) when there is one; none: no
+calibration. --neutral-at S takes the face's expression at S seconds as its neutral
+(Tracker::calibrateNeutral): the weights after it are measured from there.
 "tracked" says whether a face was followed in this frame; the face fields are the first face's
 (null without a face, or when their stage is not available: 'facetrack info' lists the stages).
 With --max-faces N > 1 a "faces" array holds every face. --raw adds "raw": the values before
@@ -137,7 +139,7 @@ MediaReader openInput(const Args& args, std::string& name) {
 }  // namespace
 
 int runTrack(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--camera", "--out", "--frames", "--overlay", "--neutral-at"}),
+    const Args args(argv, trackingOptions({"--camera", "--out", "--frames", "--overlay", "--neutral-at", "--profile"}),
                     trackingFlags({"--help", "--raw"}));
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -150,6 +152,7 @@ int runTrack(const std::vector<std::string>& argv) {
     const bool raw = args.has("--raw");
     const TrackerConfig config = trackerConfig(args);
     Tracker tracker(trackingModels(args), config);
+    tracker.setCalibration(tools::userCalibration(args));
 
     std::string inputName;
     auto reader = openInput(args, inputName);

@@ -23,6 +23,7 @@ int runEvalLandmarks(const std::vector<std::string>& argv);
 int runBench(const std::vector<std::string>& argv);
 int runEvalTrack(const std::vector<std::string>& argv);
 int runSend(const std::vector<std::string>& argv);
+int runCalibrate(const std::vector<std::string>& argv);
 int runEvalGaze(const std::vector<std::string>& argv);
 int runEvalExpressions(const std::vector<std::string>& argv);
 

@@ -21,8 +21,9 @@ commands:
   eval-track CLIP...                 tracked share, jitter with/without filter, against dlib
   eval-gaze [--clips CLIP,...]       gaze and blink against teacher labels and synthetic renders
   eval-expressions [CLIP...]         ARKit weights on hand-labelled segments: neutral bias, responses
-  send --camera DEV|--input CLIP --protocol vmc|ifacialmocap|openseeface [--to HOST:PORT]
-                                     stream to an avatar app (VSeeFace, VNyan, Warudo, ...)
+  calibrate --camera DEV|--input CLIP   measure the user's neutral, ranges and identity into a profile
+  send --camera DEV|--input CLIP --protocol vmc,ifacialmocap,openseeface [--to PROTOCOL=HOST:PORT]
+                                     stream to avatar apps (VSeeFace, VNyan, Warudo, ...)
   landmarks IMAGE|DIR|CLIP [--box x0,y0,x1,y1]   68 landmarks per face, as JSON lines
   eval-detect DIR                    detector recall and speed on .pts-annotated images
   eval-landmarks DIR                 landmark NME, failure rate, CED plot, against peers
@@ -39,17 +40,11 @@ common options:
 
 int main(int argc, char** argv) {
     using namespace facetrack::cli;
-    const std::map<std::string, std::function<int(const std::vector<std::string>&)>> commands = {{"info", runInfo},
-                                                                                                 {"detect", runDetect},
-                                                                                                 {"track", runTrack},
-                                                                                                 {"landmarks", runLandmarks},
-                                                                                                 {"eval-detect", runEvalDetect},
-                                                                                                 {"eval-landmarks", runEvalLandmarks},
-                                                                                                 {"bench", runBench},
-                                                                                                 {"eval-track", runEvalTrack},
-                                                                                                 {"send", runSend},
-                                                                                                 {"eval-gaze", runEvalGaze},
-                                                                                                 {"eval-expressions", runEvalExpressions}};
+    const std::map<std::string, std::function<int(const std::vector<std::string>&)>> commands = {
+        {"info", runInfo},           {"detect", runDetect},          {"track", runTrack},
+        {"landmarks", runLandmarks}, {"eval-detect", runEvalDetect}, {"eval-landmarks", runEvalLandmarks},
+        {"bench", runBench},         {"eval-track", runEvalTrack},   {"send", runSend},
+        {"calibrate", runCalibrate}, {"eval-gaze", runEvalGaze},     {"eval-expressions", runEvalExpressions}};
     if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
         std::fputs(kUsage, argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;

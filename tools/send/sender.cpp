@@ -4,6 +4,7 @@
 
 #include "facetrack/error.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -38,6 +39,46 @@ int defaultPort(Protocol protocol) {
             return kOpenSeeFacePort;
     }
     return 0;
+}
+
+std::vector<Destination> parseDestinations(const std::string& protocols, const std::string& to) {
+    std::vector<Destination> out;
+    const auto split = [](const std::string& text) {
+        std::vector<std::string> parts;
+        std::size_t start = 0;
+        for (std::size_t comma; (comma = text.find(',', start)) != std::string::npos; start = comma + 1)
+            parts.push_back(text.substr(start, comma - start));
+        parts.push_back(text.substr(start));
+        return parts;
+    };
+    for (const std::string& name : split(protocols)) {
+        const Protocol p = parseProtocol(name);
+        for (const auto& d : out)
+            if (d.protocol == p) throw Error("protocol '" + name + "' given twice");
+        out.push_back({p, "127.0.0.1"});
+    }
+    std::string host;  // for every protocol without its own
+    std::vector<std::pair<std::string, std::string>> own;
+    for (const std::string& part : split(to)) {
+        const auto equals = part.find('=');
+        if (equals != std::string::npos) {
+            own.emplace_back(part.substr(0, equals), part.substr(equals + 1));
+            continue;
+        }
+        if (!host.empty()) throw Error("--to gives two hosts for the same protocols: '" + host + "', '" + part + "'");
+        if (out.size() > 1 && part.find(':') != std::string::npos)
+            throw Error("--to '" + part + "': one port for several protocols; give PROTOCOL=HOST:PORT for each");
+        host = part;
+    }
+    for (auto& d : out)
+        if (!host.empty()) d.to = host;
+    for (const auto& [name, where] : own) {
+        const Protocol p = parseProtocol(name);
+        const auto d = std::find_if(out.begin(), out.end(), [&](const Destination& x) { return x.protocol == p; });
+        if (d == out.end()) throw Error("--to names '" + name + "', which --protocol does not send");
+        d->to = where;
+    }
+    return out;
 }
 
 Sender::Sender(Protocol protocol, const std::string& to, std::shared_ptr<const FaceModel> model, std::optional<int> listenPort)
@@ -79,14 +120,16 @@ void Sender::transmit(const void* data, std::size_t size) {
 
 void Sender::send(const FrameResult& frame, double time_s) {
     ++stats_.frames;
-    const FaceResult* face = frame.faces.empty() ? nullptr : &frame.faces.front();
     switch (protocol_) {
-        case Protocol::Vmc:
-            encodeVmc(face, time_s, vmc_datagrams_);
+        case Protocol::Vmc: {
+            const FaceResult* face = easing_.update(frame, time_s);
+            encodeVmc(face, easing_.tracking(), time_s, vmc_datagrams_);
             for (const auto& d : vmc_datagrams_) transmit(d.data(), d.size());
             break;
+        }
         case Protocol::IFacialMocap: {
             listenForHandshake();
+            const FaceResult* face = easing_.update(frame, time_s);
             if (!face) break;
             const std::string& text = ifacialmocap_.encode(*face);
             if (!text.empty()) transmit(text.data(), text.size());

@@ -3,6 +3,7 @@
 // UDP socket. send() is called once per tracked frame from the thread that
 // waits on the AsyncTracker, never from the tracking thread.
 
+#include "send/face_loss.hpp"
 #include "send/ifacialmocap.hpp"
 #include "send/openseeface.hpp"
 #include "send/udp.hpp"
@@ -25,6 +26,20 @@ const char* protocolName(Protocol protocol);
 /// The port receivers listen on by default: VMC 39539, iFacialMocap 49983, OpenSeeFace 11573.
 int defaultPort(Protocol protocol);
 
+/// One protocol and where it goes.
+struct Destination {
+    Protocol protocol;
+    std::string to;  ///< HOST[:PORT]
+};
+
+/// `facetrack send`'s --protocol and --to: protocols comma-separated
+/// ("vmc,openseeface"); `to` a comma-separated list of PROTOCOL=HOST[:PORT]
+/// for single protocols and at most one HOST for the rest (each on its
+/// default port), or, with one protocol, HOST[:PORT]. Throws Error on an
+/// unknown or repeated protocol, a destination for a protocol not sent, or a
+/// port given for several protocols at once.
+std::vector<Destination> parseDestinations(const std::string& protocols, const std::string& to);
+
 struct SenderStats {
     long frames = 0;     ///< frames handed to send()
     long datagrams = 0;  ///< datagrams the kernel took
@@ -41,7 +56,10 @@ public:
     Sender(Protocol protocol, const std::string& to, std::shared_ptr<const FaceModel> model, std::optional<int> listenPort = std::nullopt);
 
     /// Encodes the frame's first face (all faces for OpenSeeFace) and sends it. Never blocks.
+    /// Without a face: VMC and iFacialMocap send the avatar easing to rest (FaceLossEasing),
+    /// VMC with tracking status 0; OpenSeeFace sends nothing (its receivers' own sign of a lost face).
     void send(const FrameResult& frame, double time_s);
+    Protocol protocol() const { return protocol_; }
 
     const SenderStats& stats() const { return stats_; }
     /// Where frames go now.
@@ -55,6 +73,7 @@ private:
     Endpoint to_;
     UdpSocket socket_;
     std::optional<UdpSocket> handshake_socket_;
+    FaceLossEasing easing_;
     IFacialMocapEncoder ifacialmocap_;
     std::optional<OpenSeeFaceEncoder> openseeface_;
     std::vector<std::vector<char>> vmc_datagrams_;

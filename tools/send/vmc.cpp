@@ -74,7 +74,7 @@ void blend(BundleWriter& writer, const char* name, float value) {
 
 }  // namespace
 
-void encodeVmc(const FaceResult* face, double time_s, std::vector<std::vector<char>>& out) {
+void encodeVmc(const FaceResult* face, bool tracking, double time_s, std::vector<std::vector<char>>& out) {
     BundleWriter writer(out);
     if (face && face->pose) {
         writer.message("/VMC/Ext/Root/Pos",
@@ -100,7 +100,10 @@ void encodeVmc(const FaceResult* face, double time_s, std::vector<std::vector<ch
         for (const VrmPreset& preset : vrmPresets()) blend(writer, preset.name.data(), preset.weight(arkit));
         writer.message("/VMC/Ext/Blend/Apply", [](osc::OutboundPacketStream&) {});
     }
-    writer.message("/VMC/Ext/OK", [](osc::OutboundPacketStream& s) { s << static_cast<osc::int32>(1); });
+    writer.message("/VMC/Ext/OK", [&](osc::OutboundPacketStream& s) {
+        s << static_cast<osc::int32>(1) << static_cast<osc::int32>(3) << static_cast<osc::int32>(0)
+          << static_cast<osc::int32>(tracking ? 1 : 0);
+    });
     writer.message("/VMC/Ext/T", [&](osc::OutboundPacketStream& s) { s << static_cast<float>(time_s); });
     writer.finish();
 }

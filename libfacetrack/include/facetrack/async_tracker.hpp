@@ -19,6 +19,7 @@
 /// arrives while the previous one still waits to be tracked replaces it and
 /// counts as dropped.
 
+#include "facetrack/calibration.hpp"
 #include "facetrack/capture.hpp"
 #include "facetrack/image.hpp"
 #include "facetrack/result.hpp"
@@ -59,6 +60,8 @@ struct AsyncOptions {
     /// possible, the reader waiting for the tracker (false). Cameras always
     /// run at their own rate.
     bool realtime = true;
+    /// The user's calibration, applied before the first frame (Tracker::setCalibration).
+    Calibration calibration;
 };
 
 /// One tracked frame, as latest() hands it over.

@@ -85,6 +85,16 @@ typedef struct ft_tracker_config {
     int32_t cnn_stage; /* the CNN file's cascade stages: the shipped expression net, ~0.3 ms (1) */
 } ft_tracker_config;
 
+/* How one ARKit weight is reported (the C++ ShapeCalibration, facetrack/calibration.hpp):
+ * w' = min(gain r', 1), r' = r with the dead zone taken off, r = clamp((w - neutral) / (full - neutral), 0, 1). */
+typedef struct ft_shape_calibration {
+    uint32_t struct_size;
+    float neutral;   /* the weight on the user's relaxed face, [0, 1) (0) */
+    float full;      /* the weight of their full expression, (neutral, 1] (1) */
+    float gain;      /* (0, 10] (1) */
+    float dead_zone; /* [0, 1) (0) */
+} ft_shape_calibration;
+
 typedef struct ft_timing {
     char stage[16]; /* NUL-terminated: "detect", "landmarks", "fit", ... */
     double ms;
@@ -153,10 +163,24 @@ FT_API ft_status ft_tracker_face(const ft_tracker* tracker, int32_t index, ft_fa
 /** Forget every face (a new stream) / the calibrated identities. */
 FT_API ft_status ft_tracker_reset(ft_tracker* tracker);
 FT_API ft_status ft_tracker_reset_identity(ft_tracker* tracker);
-/** Take every followed face's current expression as its neutral (the C++
- *  Tracker::calibrateNeutral) / turn that off. */
+/** Take the first followed face's current expression as the user's neutral
+ *  (the C++ Tracker::calibrateNeutral) / set every neutral back to 0. */
 FT_API ft_status ft_tracker_calibrate_neutral(ft_tracker* tracker);
 FT_API ft_status ft_tracker_reset_neutral(ft_tracker* tracker);
+/** The user's calibration (the C++ Tracker::calibration, setCalibration), one
+ *  ARKit shape (index 0..51) at a time: `shape->struct_size` set by the caller;
+ *  setting changes only that shape, and fields past the caller's struct_size keep their value. */
+FT_API ft_status ft_tracker_shape_calibration(ft_tracker* tracker, int32_t index, ft_shape_calibration* shape);
+FT_API ft_status ft_tracker_set_shape_calibration(ft_tracker* tracker, int32_t index, const ft_shape_calibration* shape);
+/** The whole calibration as the profile's JSON text: written into `buffer`
+ *  (NUL-terminated) when `size` holds it, else FT_INVALID_ARGUMENT; `needed`
+ *  (may be NULL) gets the size it takes, NUL included. */
+FT_API ft_status ft_tracker_calibration_json(ft_tracker* tracker, char* buffer, uint32_t size, uint32_t* needed);
+FT_API ft_status ft_tracker_set_calibration_json(ft_tracker* tracker, const char* json);
+/** Read / write the profile file at `path`; NULL: the user's default
+ *  ($XDG_CONFIG_HOME/facetrack/profile.json). A bad file is FT_ERROR, the tracker unchanged. */
+FT_API ft_status ft_tracker_load_profile(ft_tracker* tracker, const char* path);
+FT_API ft_status ft_tracker_save_profile(ft_tracker* tracker, const char* path);
 /** Which ARKit shapes some stage estimates (the C++ Tracker::estimatedShapes):
  *  estimated[i] = 1 for ft_arkit_name(i) when one does, 0 when it is always 0.
  *  `estimated` holds FT_ARKIT_COUNT values. */

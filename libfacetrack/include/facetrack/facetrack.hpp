@@ -5,6 +5,7 @@
 
 #include "facetrack/arkit.hpp"
 #include "facetrack/async_tracker.hpp"
+#include "facetrack/calibration.hpp"
 #include "facetrack/capture.hpp"
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/detector.hpp"

@@ -122,7 +122,7 @@ struct CameraIntrinsics {
 
 /// One entry of Tracker::stages(). The same names label FrameResult::timings.
 struct StageInfo {
-    std::string name;  ///< "detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "neutral"
+    std::string name;  ///< "detect", "verify", "landmarks", "refine", "fit", "cnn", "gaze", "filter", "calibration"
     bool available = false;
     std::string detail;  ///< what implements it, or why it is not available
 };

@@ -2,7 +2,7 @@
 /// \file
 /// The Tracker wires the stages into one pipeline:
 ///   frame -> detect (when fewer faces than wanted are followed) -> verify (now and then)
-///         -> per face: landmarks -> refine -> fit -> cnn -> gaze -> filter -> neutral -> result
+///         -> per face: landmarks -> refine -> fit -> cnn -> gaze -> filter -> calibration -> result
 /// docs/architecture.md shows the data flow. Stages not built yet report
 /// "not available" and leave their fields of FaceResult empty.
 ///
@@ -10,6 +10,7 @@
 /// number of Trackers on any threads. A Tracker follows one video stream and
 /// is used by one thread at a time; run one Tracker per stream or per thread.
 
+#include "facetrack/calibration.hpp"
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/eye_model.hpp"
@@ -139,15 +140,28 @@ public:
     /// Convenience: a new FrameResult per frame (allocates).
     FrameResult process(const ImageView& frame, double time_s);
 
-    /// Forgets the calibrated identity of every followed face: they go back to
-    /// the mean face and calibrate again.
+    /// Forgets the identity of every followed face and the calibration's: they
+    /// go back to the mean face and estimate it again.
     void resetIdentity();
 
-    /// Takes every followed face's current expression as that user's neutral
-    /// (ask them to relax first): from now on each weight w is reported as
-    /// (w - w0) / (1 - w0), clamped to [0, 1], w0 its neutral value; the eyes'
-    /// look directions are left as they are. Off by default; per face, so a
-    /// face found later starts without one. resetNeutral() turns it off.
+    /// The user's calibration this Tracker applies (facetrack/calibration.hpp):
+    /// neutral, ranges, gains, dead zones, and the identity: the calibration's
+    /// own or, when it has none, the first followed face's once estimated.
+    /// Save it as the user's profile with saveCalibration().
+    Calibration calibration() const;
+    /// Applies `calibration` to every face, followed now or found later (one
+    /// user at the camera: a face lost and found again keeps it). Its identity,
+    /// when given, is taken as the user's face shape instead of estimating one;
+    /// when empty, followed faces keep theirs and new ones estimate their own.
+    /// Calibration{} turns calibration off. Throws Error, changing nothing, on
+    /// a value out of range or a size that does not fit the face model.
+    void setCalibration(const Calibration& calibration);
+
+    /// Takes the first followed face's current expression, as estimated
+    /// before calibration, as the user's neutral (ask them to relax first);
+    /// ranges, gains and dead zones stay, and the eyes' look directions keep
+    /// theirs (a relaxed face may look anywhere). No face followed: nothing
+    /// changes. resetNeutral() sets every neutral back to 0.
     void calibrateNeutral();
     void resetNeutral();
 

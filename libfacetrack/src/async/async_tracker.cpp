@@ -40,7 +40,9 @@ struct FrameCopy {
 
 struct AsyncTracker::Impl {
     Impl(Models models, const TrackerConfig& config, std::unique_ptr<FrameSource> s, const AsyncOptions& o)
-        : tracker(std::move(models), config), source(std::move(s)), options(o) {}
+        : tracker(std::move(models), config), source(std::move(s)), options(o) {
+        tracker.setCalibration(options.calibration);
+    }
 
     Tracker tracker;
     std::unique_ptr<FrameSource> source;

@@ -255,6 +255,53 @@ ft_status ft_tracker_reset_neutral(ft_tracker* tracker) {
     return guarded(tracker->error, [&] { tracker->tracker.resetNeutral(); });
 }
 
+ft_status ft_tracker_shape_calibration(ft_tracker* tracker, int32_t index, ft_shape_calibration* shape) {
+    if (!tracker || !shape || index < 0 || index >= FT_ARKIT_COUNT) return FT_INVALID_ARGUMENT;
+    const facetrack::ShapeCalibration s = tracker->tracker.calibration().shapes[static_cast<std::size_t>(index)];
+    ft_shape_calibration full{sizeof(ft_shape_calibration), s.neutral, s.full, s.gain, s.dead_zone};
+    return copyOut(full, shape);
+}
+
+ft_status ft_tracker_set_shape_calibration(ft_tracker* tracker, int32_t index, const ft_shape_calibration* shape) {
+    if (!tracker || !shape || shape->struct_size < sizeof(uint32_t) || index < 0 || index >= FT_ARKIT_COUNT) return FT_INVALID_ARGUMENT;
+    return guarded(tracker->error, [&] {
+        facetrack::Calibration calibration = tracker->tracker.calibration();
+        facetrack::ShapeCalibration& s = calibration.shapes[static_cast<std::size_t>(index)];
+        ft_shape_calibration given{sizeof(ft_shape_calibration), s.neutral, s.full, s.gain, s.dead_zone};
+        std::memcpy(static_cast<void*>(&given), shape, std::min<uint32_t>(shape->struct_size, sizeof given));
+        s = {given.neutral, given.full, given.gain, given.dead_zone};
+        tracker->tracker.setCalibration(calibration);
+    });
+}
+
+ft_status ft_tracker_calibration_json(ft_tracker* tracker, char* buffer, uint32_t size, uint32_t* needed) {
+    if (!tracker) return FT_INVALID_ARGUMENT;
+    std::string json;
+    const ft_status status = guarded(tracker->error, [&] { json = facetrack::toJson(tracker->tracker.calibration()); });
+    if (status != FT_OK) return status;
+    if (needed) *needed = static_cast<uint32_t>(json.size() + 1);
+    if (!buffer || size < json.size() + 1) return FT_INVALID_ARGUMENT;
+    std::memcpy(buffer, json.c_str(), json.size() + 1);
+    return FT_OK;
+}
+
+ft_status ft_tracker_set_calibration_json(ft_tracker* tracker, const char* json) {
+    if (!tracker || !json) return FT_INVALID_ARGUMENT;
+    return guarded(tracker->error, [&] { tracker->tracker.setCalibration(facetrack::calibrationFromJson(json)); });
+}
+
+ft_status ft_tracker_load_profile(ft_tracker* tracker, const char* path) {
+    if (!tracker) return FT_INVALID_ARGUMENT;
+    return guarded(tracker->error,
+                   [&] { tracker->tracker.setCalibration(facetrack::loadCalibration(path ? path : facetrack::defaultProfilePath())); });
+}
+
+ft_status ft_tracker_save_profile(ft_tracker* tracker, const char* path) {
+    if (!tracker) return FT_INVALID_ARGUMENT;
+    return guarded(tracker->error,
+                   [&] { facetrack::saveCalibration(tracker->tracker.calibration(), path ? path : facetrack::defaultProfilePath()); });
+}
+
 ft_status ft_tracker_estimated_shapes(const ft_tracker* tracker, int32_t estimated[FT_ARKIT_COUNT]) {
     if (!tracker || !estimated) return FT_INVALID_ARGUMENT;
     std::string ignored;

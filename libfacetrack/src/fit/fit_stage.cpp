@@ -3,6 +3,8 @@
 #include "core/math.hpp"
 #include "fit/face_fitter.hpp"
 
+#include "facetrack/error.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -59,7 +61,9 @@ public:
     std::unique_ptr<pipeline::StageState> newFaceState() const override {
         FitSettings fitSettings;
         fitSettings.expression_l2 *= settings_.expression_prior;
-        return std::make_unique<FitFaceState>(basis_, fitSettings, settings_.calibration_frames);
+        auto state = std::make_unique<FitFaceState>(basis_, fitSettings, settings_.calibration_frames);
+        if (identity_.size() > 0) adoptIdentity(*state);
+        return state;
     }
 
     pipeline::Contract contract() const override {
@@ -99,7 +103,25 @@ public:
         s.samples = 0;
     }
 
+    /// A calibration's identity is the user's: every face takes it, calibrated.
+    void setCalibration(const Calibration& calibration, const std::vector<pipeline::StageState*>& faces) override {
+        if (!calibration.identity.empty() && static_cast<int>(calibration.identity.size()) != basis_->identityCount()) {
+            throw Error("calibration: identity has " + std::to_string(calibration.identity.size()) + " coefficients, the face model " +
+                        std::to_string(basis_->identityCount()));
+        }
+        identity_.resize(0);
+        if (calibration.identity.empty()) return;  // none given: new faces estimate their own, followed ones keep theirs
+        identity_ = Eigen::Map<const Eigen::VectorXf>(calibration.identity.data(), basis_->identityCount()).cast<double>();
+        for (pipeline::StageState* face : faces) adoptIdentity(static_cast<FitFaceState&>(*face));
+    }
+
 private:
+    void adoptIdentity(FitFaceState& s) const {
+        s.fitter.setIdentity(identity_);
+        s.calibrated = true;
+        s.samples = 0;
+    }
+
     /// Every kCalibrationStride-th well-fitted frame joins the window; a full
     /// window gives the identity, fitted jointly with every sample's pose and
     /// expression, then frozen.
@@ -147,6 +169,7 @@ private:
     std::shared_ptr<const FaceModel> model_;
     std::shared_ptr<const FitBasis> basis_;
     FitStageSettings settings_;
+    Eigen::VectorXd identity_;  ///< the calibration's; empty: each face estimates its own
 };
 
 }  // namespace

@@ -7,12 +7,13 @@
 // what the stages before it provide (Stage::connect). docs/architecture.md,
 // "Adding a stage".
 //
-//   frame ──> [landmarks] ──> [refine] ──> [fit] ──> [cnn] ──> [gaze] ──> [filter] ──> [neutral] ──> FaceResult
+//   frame ──> [landmarks] ──> [refine] ──> [fit] ──> [cnn] ──> [gaze] ──> [filter] ──> [calibration] ──> FaceResult
 //                 ^                          │
 //                 └──────── next_start ──────┘   (the fitted face's projection starts the next frame's search)
 
 #include "core/camera.hpp"
 
+#include "facetrack/calibration.hpp"
 #include "facetrack/image.hpp"
 #include "facetrack/result.hpp"
 
@@ -174,9 +175,14 @@ public:
     virtual Outcome run(const FrameInput& frame, FaceTrack& face, StageState* state) = 0;
     /// Forget per-user estimates (Tracker::resetIdentity).
     virtual void resetIdentity(StageState* /*state*/) const {}
-    /// Take the face's current expression as its neutral (`on`), or forget it
-    /// (Tracker::calibrateNeutral, resetNeutral).
-    virtual void calibrateNeutral(StageState* /*state*/, bool /*on*/) const {}
+    /// The user's calibration changed (Tracker::setCalibration): keep what
+    /// this stage applies, for the followed faces (`faces`: this stage's state
+    /// of each) and for faces found later. Throws Error, changing nothing,
+    /// when the calibration does not fit the stage's models.
+    virtual void setCalibration(const Calibration& /*calibration*/, const std::vector<StageState*>& /*faces*/) {}
+    /// Write the face's current expression, as estimated before calibration,
+    /// into `into` as its neutral (Tracker::calibrateNeutral).
+    virtual void captureNeutral(const StageState* /*state*/, Calibration& /*into*/) const {}
 };
 
 using StageList = std::vector<std::unique_ptr<Stage>>;

@@ -1,5 +1,6 @@
 #include "facetrack/tracker.hpp"
 
+#include "calibration/calibration_stage.hpp"
 #include "core/camera.hpp"
 #include "core/environment.hpp"
 #include "expression/cnn_stage.hpp"
@@ -9,7 +10,6 @@
 #include "gaze/gaze_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
 #include "landmarks/lbf.hpp"
-#include "neutral/neutral_stage.hpp"
 #include "refine/refine_stage.hpp"
 #include "track/tracker_core.hpp"
 
@@ -77,7 +77,7 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
                                       : pipeline::notAvailable("cnn", "off (TrackerConfig::cnn_stage)"));
     stages.push_back(gaze::makeGazeStage(models.eyes, models.face));
     stages.push_back(filter::makeFilterStage(models.face, {f.min_cutoff_hz, f.beta, f.derivative_cutoff_hz}, f.enabled));
-    stages.push_back(neutral::makeNeutralStage(models.face));
+    stages.push_back(calibration::makeCalibrationStage(models.face));
     return stages;
 }
 
@@ -86,6 +86,7 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
 struct Tracker::Impl {
     Models models;
     track::TrackerCore core;
+    Calibration calibration;
 };
 
 Tracker::Tracker(Models models, const TrackerConfig& config) : Tracker(models, config, createFaceDetector(config.detector)) {}
@@ -96,7 +97,7 @@ Tracker::Tracker(Models models, const TrackerConfig& config, std::unique_ptr<Fac
     pipeline::StageList stages = stageList(models, config, *detector);
     track::LifecycleSettings lifecycle{config.max_faces, config.detect_interval, config.verify_interval, config.camera};
     impl_ = std::make_unique<Impl>(
-        Impl{std::move(models), track::TrackerCore(std::move(detector), std::move(stages), std::move(lifecycle))});
+        Impl{std::move(models), track::TrackerCore(std::move(detector), std::move(stages), std::move(lifecycle)), Calibration{}});
 }
 
 Tracker::~Tracker() = default;
@@ -120,9 +121,45 @@ FrameResult Tracker::process(const ImageView& frame, double time_s) {
 }
 
 void Tracker::reset() { impl_->core.reset(); }
-void Tracker::resetIdentity() { impl_->core.resetIdentity(); }
-void Tracker::calibrateNeutral() { impl_->core.calibrateNeutral(true); }
-void Tracker::resetNeutral() { impl_->core.calibrateNeutral(false); }
+void Tracker::resetIdentity() {
+    impl_->calibration.identity.clear();
+    impl_->core.setCalibration(impl_->calibration);
+    impl_->core.resetIdentity();
+}
+
+Calibration Tracker::calibration() const {
+    Calibration out = impl_->calibration;
+    const FaceResult* face = impl_->core.firstFace();
+    if (out.identity.empty() && face && face->identity_calibrated) out.identity = face->identity;
+    return out;
+}
+
+void Tracker::setCalibration(const Calibration& calibration) {
+    validate(calibration);
+    const FaceModel& face = *impl_->models.face;
+    if (!calibration.native_neutral.empty() && calibration.native_neutral.size() != face.expressionNames().size()) {
+        throw Error("calibration: native_neutral has " + std::to_string(calibration.native_neutral.size()) + " weights, the face model " +
+                    std::to_string(face.expressionNames().size()));
+    }
+    if (!calibration.identity.empty() && static_cast<int>(calibration.identity.size()) != face.identityCount()) {
+        throw Error("calibration: identity has " + std::to_string(calibration.identity.size()) + " coefficients, the face model " +
+                    std::to_string(face.identityCount()));
+    }
+    impl_->core.setCalibration(calibration);
+    impl_->calibration = calibration;
+}
+
+void Tracker::calibrateNeutral() {
+    Calibration next = impl_->calibration;
+    if (impl_->core.captureNeutral(next)) setCalibration(next);
+}
+
+void Tracker::resetNeutral() {
+    Calibration next = impl_->calibration;
+    for (auto& shape : next.shapes) shape.neutral = 0.f;
+    next.native_neutral.clear();
+    setCalibration(next);
+}
 std::vector<StageInfo> Tracker::stages() const { return impl_->core.stages(); }
 
 std::vector<std::string> Tracker::estimatedShapes() const {

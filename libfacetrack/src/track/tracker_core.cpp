@@ -359,16 +359,31 @@ void TrackerCore::reset() {
     last_time_ = std::numeric_limits<double>::quiet_NaN();
 }
 
-void TrackerCore::calibrateNeutral(bool on) {
-    for (auto& t : tracks_) {
-        for (std::size_t k = 0; k < stages_.size(); ++k) {
-            if (t.states[k]) stages_[k]->calibrateNeutral(t.states[k].get(), on);
-        }
+void TrackerCore::setCalibration(const Calibration& calibration) {
+    std::vector<pipeline::StageState*> faces;
+    for (std::size_t k = 0; k < stages_.size(); ++k) {
+        faces.clear();
+        for (auto& t : tracks_)
+            if (t.states[k]) faces.push_back(t.states[k].get());
+        stages_[k]->setCalibration(calibration, faces);
     }
 }
 
+bool TrackerCore::captureNeutral(Calibration& into) const {
+    if (tracks_.empty()) return false;
+    const pipeline::FaceTrack& first = tracks_.front();
+    for (std::size_t k = 0; k < stages_.size(); ++k) {
+        if (first.states[k]) stages_[k]->captureNeutral(first.states[k].get(), into);
+    }
+    return true;
+}
+
+const FaceResult* TrackerCore::firstFace() const { return tracks_.empty() ? nullptr : &tracks_.front().result; }
+
 void TrackerCore::resetIdentity() {
     for (auto& t : tracks_) {
+        t.result.identity.clear();  // until the next frame reports the mean face
+        t.result.identity_calibrated = false;
         for (std::size_t k = 0; k < stages_.size(); ++k) {
             if (t.states[k]) stages_[k]->resetIdentity(t.states[k].get());
         }

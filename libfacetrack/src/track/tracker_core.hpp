@@ -36,8 +36,13 @@ public:
 
     void reset();
     void resetIdentity();
-    /// Takes each followed face's current expression as its neutral; off: forgets them.
-    void calibrateNeutral(bool on);
+    /// Hands the user's calibration to every stage, for the followed faces and later ones.
+    void setCalibration(const Calibration& calibration);
+    /// Writes the first followed face's expression, as estimated before
+    /// calibration, into `into` as its neutral; false when no face is followed.
+    bool captureNeutral(Calibration& into) const;
+    /// The first followed face's result as of the last frame; null when none.
+    const FaceResult* firstFace() const;
 
     /// "detect", "verify", then the stages, in order.
     std::vector<StageInfo> stages() const;
