@@ -52,8 +52,8 @@ cv::Size DemoView::panelSizeFor(cv::Size frameSize) {
 DemoView::DemoView(std::shared_ptr<const FaceModel> model, int panelWidth, int panelHeight)
     : poser_(model), overlay_(model), avatar_(model), panel_width_(panelWidth), panel_height_(panelHeight) {}
 
-void DemoView::draw(const cv::Mat& frameBgr, const FrameResult& result, const Hud& hud, bool mirror) {
-    // The first face's mesh is posed once, for the overlay and the avatar both.
+void DemoView::draw(const cv::Mat& frameBgr, const FrameResult& result, const FaceResult* avatar, const Hud& hud, bool mirror) {
+    // The first face's mesh is posed once, for the overlay and (when it is the avatar's face) the avatar both.
     const FaceResult* face = result.faces.empty() ? nullptr : &result.faces.front();
     const bool posed = face && face->pose && face->expression;
     if (posed) poser_.modelFrame(*face, mesh_);
@@ -62,10 +62,11 @@ void DemoView::draw(const cv::Mat& frameBgr, const FrameResult& result, const Hu
         overlay_.draw(annotated_, result, posed ? &mesh_ : nullptr);
         image_.draw(annotated_, 0, 0, panel_width_, panel_height_, mirror);
     }
-    if (posed) {
-        avatar_.drawMesh(mesh_, face->pose->rotation, panel_width_, 0, panel_width_, panel_height_, mirror);
+    if (avatar && avatar->pose && avatar->expression) {
+        if (avatar != face) poser_.modelFrame(*avatar, mesh_);
+        avatar_.drawMesh(mesh_, avatar->pose->rotation, panel_width_, 0, panel_width_, panel_height_, mirror);
     } else {
-        avatar_.draw(face ? AvatarState::of(*face) : AvatarState{}, panel_width_, 0, panel_width_, panel_height_, mirror);
+        avatar_.draw(avatar ? AvatarState::of(*avatar) : AvatarState{}, panel_width_, 0, panel_width_, panel_height_, mirror);
     }
 
     char first[96];

@@ -1,7 +1,7 @@
 #pragma once
-// The demo's window content, left to right: the camera image with the
-// tracker's overlay (landmarks, projected mesh, head axes, gaze rays), the
-// avatar of the first face, and a HUD with fps and per-stage timings.
+// The app's two picture panels, left to right: the camera image with the
+// tracker's overlay (landmarks, projected mesh, head axes, gaze rays) and a
+// HUD with fps and per-stage timings, then the avatar.
 
 #include "app/overlay.hpp"
 #include "avatar_renderer.hpp"
@@ -30,9 +30,12 @@ public:
     /// Each panel is panelWidth x panelHeight; the window is twice as wide.
     DemoView(std::shared_ptr<const FaceModel> model, int panelWidth, int panelHeight);
 
-    /// Draws into the current framebuffer (GlContext::beginFrame first).
-    void draw(const cv::Mat& frameBgr, const FrameResult& result, const Hud& hud, bool mirror);
+    /// Draws into the current framebuffer (GlContext::beginFrame first). The
+    /// avatar shows `avatar` (the first face, or one easing to rest after a
+    /// loss: send::FaceLossEasing); null: the avatar at rest.
+    void draw(const cv::Mat& frameBgr, const FrameResult& result, const FaceResult* avatar, const Hud& hud, bool mirror);
 
+    /// The two panels' width.
     int width() const { return 2 * panel_width_; }
     int height() const { return panel_height_; }
     /// The avatar's panel in screenshot (top-left origin) pixels.

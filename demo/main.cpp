@@ -1,10 +1,13 @@
-// facetrack_demo: the live demo (docs/demo.md). A webcam (V4L2) or a clip or
+// facetrack_demo: the tracker app (docs/demo.md). A webcam (V4L2) or a clip or
 // image folder goes through the Tracker; the window shows the image with the
-// tracker's overlay, the avatar, and the timings.
+// tracker's overlay, the avatar, and a panel with every shape, the
+// calibration and the senders.
 
 #include "controls.hpp"
 #include "demo_view.hpp"
 #include "gl.hpp"
+#include "guided_calibration.hpp"
+#include "tracker_panel.hpp"
 
 #include "app/args.hpp"
 #include "app/image_view.hpp"
@@ -12,11 +15,15 @@
 #include "app/tool_main.hpp"
 #include "app/tracking_options.hpp"
 #include "facetrack/facetrack.hpp"
+#include "send/face_loss.hpp"
+#include "send/sender.hpp"
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
 #include <opencv2/imgcodecs.hpp>
+
+#include <sys/resource.h>
 
 #include <chrono>
 #include <filesystem>
@@ -29,10 +36,13 @@ namespace facetrack::demo {
 namespace {
 
 const char* kUsage = R"(usage: facetrack_demo [--camera /dev/videoN] [--size 640x480] [--fps 30] [--format auto|yuyv|mjpeg]
-                      [--input CLIP|DIR] [--headless] [--frames N] [--screenshot out.png] [tracking options]
+                      [--input CLIP|DIR] [--headless] [--frames N] [--screenshot out.png]
+                      [--profile FILE|none] [--guided-calibration] [--send PROTOCOL,... [--to ...]]
+                      [tracking options]
 
 Tracks a webcam (default: the first /dev/video*), or a clip or image folder given with --input,
-and shows the image with landmarks, mesh and gaze next to the avatar.
+and shows the image with landmarks, mesh and gaze, the avatar, and a panel with a bar per ARKit
+shape, head pose and gaze, the calibration and the senders.
 
   --camera DEV          V4L2 device (default: the first /dev/video*)
   --size WxH, --fps F   capture mode requested from the camera (default 640x480 at 30)
@@ -42,15 +52,20 @@ and shows the image with landmarks, mesh and gaze next to the avatar.
   --frames N            stop after N frames
   --screenshot PNG      save the last frame's window content
   --msaa N              antialiasing samples (default 4 on a GPU, 0 on a software renderer)
+  --profile FILE        the calibration profile to apply and to save to (default: the user's,
+                        $XDG_CONFIG_HOME/facetrack/profile.json; none: start uncalibrated)
+  --guided-calibration  start the guided calibration at once
+  --send P,...          send to avatar apps from the start (vmc, ifacialmocap, openseeface);
+                        --to as in 'facetrack send'; the panel turns each on and off
 tracking options: --detector, --yunet, --min-score, --max-faces, --fov, --focal,
   --calibration-frames, --expression-prior, --filter-cutoff, --filter-beta, --no-filter,
   --no-cnn-stage (as in 'facetrack track')
 
-keys: space pause, r reset identity calibration, m mirror, q or Esc quit
+keys: space pause, r reset identity calibration, n neutral now (again: off), m mirror, q or Esc quit
 )";
 
 void onKey(GLFWwindow* window, int key, int, int action, int) {
-    if (action != GLFW_PRESS) return;
+    if (action != GLFW_PRESS || TrackerPanel::wantsKeyboard()) return;
     auto& controls = *static_cast<Controls*>(glfwGetWindowUserPointer(window));
     controls.press(key);
     if (controls.quit) glfwSetWindowShouldClose(window, GLFW_TRUE);
@@ -102,11 +117,57 @@ bool reopenCamera(tools::MediaReader& reader, const CaptureSettings& settings) {
     return false;
 }
 
+/// The panel's sender rows: every protocol, those named by --send (and --to) on.
+std::vector<SenderToggle> senderToggles(const tools::Args& args) {
+    std::vector<SenderToggle> toggles;
+    for (const char* name : {"vmc", "ifacialmocap", "openseeface"}) toggles.push_back({name, false, "127.0.0.1", ""});
+    if (!args.has("--send")) return toggles;
+    for (const send::Destination& d : send::parseDestinations(args.get("--send"), args.get("--to"))) {
+        for (SenderToggle& t : toggles) {
+            if (t.protocol != send::protocolName(d.protocol)) continue;
+            t.enabled = true;
+            t.destination = d.to;
+        }
+    }
+    return toggles;
+}
+
+/// Opens a sender for each toggle turned on, closes those turned off, and says what each sent.
+void syncSenders(std::vector<SenderToggle>& toggles, std::vector<std::unique_ptr<send::Sender>>& senders,
+                 const std::shared_ptr<const FaceModel>& model) {
+    senders.resize(toggles.size());
+    for (std::size_t i = 0; i < toggles.size(); ++i) {
+        SenderToggle& t = toggles[i];
+        if (!t.enabled) {
+            senders[i].reset();
+            continue;
+        }
+        if (!senders[i]) {
+            try {
+                senders[i] = std::make_unique<send::Sender>(send::parseProtocol(t.protocol), t.destination, model);
+            } catch (const Error& e) {
+                t.enabled = false;
+                t.status = e.what();
+                continue;
+            }
+        }
+        t.status = std::to_string(senders[i]->stats().datagrams) + " datagrams to " + senders[i]->destination() +
+                   " (turn off and on to send elsewhere)";
+    }
+}
+
+double cpuSeconds() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
 int run(int argc, char** argv) {
-    const tools::Args args(
-        std::vector<std::string>(argv + 1, argv + argc),
-        tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot", "--msaa"}),
-        tools::trackingFlags({"--help", "--headless"}));
+    const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
+                           tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot",
+                                                   "--msaa", "--profile", "--send", "--to"}),
+                           tools::trackingFlags({"--help", "--headless", "--guided-calibration"}));
     if (args.has("--help")) {
         std::fputs(kUsage, stdout);
         return 0;
@@ -115,6 +176,14 @@ int run(int argc, char** argv) {
     const bool headless = args.has("--headless");
     const int maxFrames = args.integer("--frames", headless ? 100 : -1);
     const std::string screenshot = args.get("--screenshot");
+    std::vector<SenderToggle> toggles = senderToggles(args);
+    Tracker tracker(tools::trackingModels(args), tools::trackerConfig(args));
+    // The profile is read when it is there and written by the panel's Save; unlike track and send,
+    // the app starts uncalibrated from a named profile not written yet.
+    const std::string given = args.get("--profile");
+    const std::string profile = given.empty() || given == "none" ? defaultProfilePath() : given;
+    std::error_code ec;
+    if (given != "none" && std::filesystem::exists(profile, ec)) tracker.setCalibration(loadCalibration(profile));
 
     const bool fromCamera = !args.has("--input");
     CaptureSettings settings;
@@ -127,26 +196,59 @@ int run(int argc, char** argv) {
     }
     std::cerr << "facetrack_demo: " << reader.describe() << '\n';
 
-    Tracker tracker(tools::trackingModels(args), tools::trackerConfig(args));
     tools::MediaFrame frame;
     if (!reader.next(frame)) throw Error("no frames in " + reader.describe());
     cv::Mat shown = frame.bgr.clone();
 
     const cv::Size panel = DemoView::panelSizeFor(shown.size());
-    GlContext gl(2 * panel.width, panel.height, "facetrack demo", !headless, args.integer("--msaa", -1));
+    GlContext gl(2 * panel.width + TrackerPanel::kWidth, panel.height, "facetrack", !headless, args.integer("--msaa", -1));
     std::cerr << "facetrack_demo: rendering with " << gl.rendererName() << ", " << gl.samples() << "x multisampling\n";
     DemoView view(tracker.models().face, panel.width, panel.height);
     Controls keys;
     glfwSetWindowUserPointer(gl.window(), &keys);
     glfwSetKeyCallback(gl.window(), onKey);
+    TrackerPanel sidePanel(gl.window());  // after the key callback: ImGui chains it
+
+    PanelState state;
+    state.senders = std::move(toggles);
+    for (const auto& name : tracker.estimatedShapes()) state.estimated[static_cast<std::size_t>(arkitIndex(name))] = true;
+    state.calibration_note = tracker.calibration() == Calibration{} ? "not calibrated; profile " + profile : "calibrated from " + profile;
+    std::vector<std::unique_ptr<send::Sender>> senders;
+    send::FaceLossEasing avatarEasing;
+    GuidedCalibration guided;
+    if (args.has("--guided-calibration")) guided.start(tracker);
 
     using Clock = std::chrono::steady_clock;
     const auto started = Clock::now();
     const double firstFrameTime = frame.time_s;
-    auto lastTracked = Clock::now();
+    auto lastTracked = Clock::now(), readAt = Clock::now(), cpuAt = Clock::now();
+    double cpuThen = cpuSeconds(), lostSince = -1.0;
     Hud hud;
     FrameResult result;  // reused frame to frame: tracking allocates nothing once a face is followed
-    tracker.process(tools::viewOf(shown), frame.time_s, result);
+    const FaceResult* avatar = nullptr;
+    const auto track = [&] {
+        tracker.process(tools::viewOf(shown), frame.time_s, result);
+        state.latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - readAt).count();
+        if (guided.update(tracker, result, frame.time_s)) {
+            try {
+                saveCalibration(tracker.calibration(), profile);
+                state.calibration_note = guided.outcome() + "; saved to " + profile;
+            } catch (const Error& e) {
+                state.calibration_note = guided.outcome() + "; not saved: " + e.what();
+            }
+        } else if (!guided.outcome().empty() && !guided.running()) {
+            state.calibration_note = guided.outcome();
+        }
+        state.prompt = guided.step();
+        avatar = avatarEasing.update(result, frame.time_s);
+        if (result.faces.empty() && avatar && lostSince < 0.0) lostSince = frame.time_s;
+        if (!result.faces.empty()) lostSince = -1.0;
+        state.lost_for_s = lostSince < 0.0 ? -1.0 : frame.time_s - lostSince;
+        syncSenders(state.senders, senders, tracker.models().face);
+        for (auto& sender : senders)
+            if (sender) sender->send(result, frame.time_s);
+    };
+    track();
     int frames = 1;
     bool pending = false;                                  // `frame` holds a frame read but not tracked yet
     std::string waiting;                                   // why no new frame came this time
@@ -172,6 +274,7 @@ int run(int argc, char** argv) {
             switch (reader.read(frame)) {
                 case tools::ReadStatus::Frame:
                     pending = true;
+                    readAt = Clock::now();
                     break;
                 case tools::ReadStatus::Timeout:
                     waiting = "waiting for the camera...";
@@ -191,7 +294,7 @@ int run(int argc, char** argv) {
         if (pending && !keys.paused && due) {
             frame.bgr.copyTo(shown);
             if (reader.isStillImages()) tracker.reset();  // unrelated photos: nothing to follow
-            tracker.process(tools::viewOf(shown), frame.time_s, result);
+            track();
             pending = false;
             ++frames;
             const double dt = std::max(std::chrono::duration<double>(Clock::now() - lastTracked).count(), 1e-6);
@@ -201,6 +304,13 @@ int run(int argc, char** argv) {
             std::this_thread::sleep_for(std::chrono::milliseconds(2));
             if (!keys.paused) continue;  // the clip's next frame is not due yet
         }
+        if (const double wall = std::chrono::duration<double>(Clock::now() - cpuAt).count(); wall >= 1.0) {
+            const double cpu = cpuSeconds();
+            state.cpu_percent = 100.0 * (cpu - cpuThen) / wall;
+            cpuThen = cpu;
+            cpuAt = Clock::now();
+        }
+        state.fps = hud.fps;
 
         const auto renderStart = Clock::now();
         hud.notes = {reader.describe() + (keys.paused ? "   PAUSED" : "") + (keys.mirror ? "   mirrored" : "")};
@@ -208,8 +318,28 @@ int run(int argc, char** argv) {
             if (!note.empty()) hud.notes.push_back(note);
         }
         gl.beginFrame(0.16f, 0.17f, 0.20f);
-        view.draw(shown, result, hud, keys.mirror);
+        view.draw(shown, result, avatar, hud, keys.mirror);
+        const PanelClicks clicks = sidePanel.draw(result.faces.empty() ? nullptr : &result.faces.front(), state, view.width(), gl.width(),
+                                                  gl.height());
         gl.endFrame();
+        if (clicks.neutral) {
+            tracker.calibrateNeutral();
+            state.calibration_note = "neutral taken from this frame (Save profile keeps it)";
+        }
+        if (clicks.guided) guided.start(tracker);
+        if (clicks.cancel_guided) guided.cancel(tracker);
+        if (clicks.reset) {
+            tracker.setCalibration({});
+            state.calibration_note = "not calibrated";
+        }
+        if (clicks.save) {
+            try {
+                saveCalibration(tracker.calibration(), profile);
+                state.calibration_note = "saved to " + profile;
+            } catch (const Error& e) {
+                state.calibration_note = e.what();
+            }
+        }
         hud.timings = result.timings;
         hud.timings.push_back({"render", std::chrono::duration<double, std::milli>(Clock::now() - renderStart).count()});
         for (const auto& t : hud.timings) {

@@ -5,6 +5,8 @@
 #include "controls.hpp"
 #include "demo_view.hpp"
 #include "gl.hpp"
+#include "guided_calibration.hpp"
+#include "tracker_panel.hpp"
 #include "test_support.hpp"
 
 #include "core/image.hpp"
@@ -65,8 +67,8 @@ TEST(Demo, HeadlessScreenshotShowsTheClipAndTheAvatar) {
     const cv::Mat image = cv::imread(shot.string());
     std::filesystem::remove(shot);
     ASSERT_FALSE(image.empty());
-    // 400x300 clip: 640x480 panels side by side.
-    ASSERT_EQ(image.size(), cv::Size(1280, 480));
+    // 400x300 clip: 640x480 panels side by side, then the side panel.
+    ASSERT_EQ(image.size(), cv::Size(1280 + demo::TrackerPanel::kWidth, 480));
     const cv::Mat camera = image(cv::Rect(0, 0, 640, 480)), avatar = image(cv::Rect(640, 0, 640, 480));
     cv::Scalar mean, stddev;
     cv::meanStdDev(camera, mean, stddev);
@@ -118,7 +120,7 @@ TEST(Demo, AvatarChangesWithTheExpressionAndOnlyThen) {
     demo::DemoView view(tracker.models().face, panel.width, panel.height);
     const auto render = [&](const TrackedFrame& frame, const FrameResult& result) {
         gl.beginFrame(0.16f, 0.17f, 0.20f);
-        view.draw(frame.bgr, result, demo::Hud{}, false);
+        view.draw(frame.bgr, result, result.faces.empty() ? nullptr : &result.faces.front(), demo::Hud{}, false);
         gl.endFrame();
         return gl.readPixels()(view.avatarPanel()).clone();
     };
@@ -198,7 +200,7 @@ TEST(Demo, MirrorFlipsBothPanels) {
     FrameResult none;
     const auto render = [&](bool mirror) {
         gl.beginFrame(0.16f, 0.17f, 0.20f);
-        view.draw(frame, none, demo::Hud{}, mirror);
+        view.draw(frame, none, nullptr, demo::Hud{}, mirror);
         gl.endFrame();
         return gl.readPixels();
     };
@@ -235,6 +237,102 @@ TEST(Demo, BadArgumentsAreRefused) {
     EXPECT_NE(test::runCommand(demo(), "--format h264").err.find("--format must be"), std::string::npos);
     EXPECT_NE(test::runCommand(demo(), "--bogus").err.find("unknown option"), std::string::npos);
     EXPECT_EQ(test::runCommand(demo(), "--help").exit_code, 0);
+}
+
+/// Pixels of the screenshot's side panel within 8 of `rgba`'s colour.
+cv::Mat panelPixelsOf(const cv::Mat& shot, const std::array<unsigned char, 4>& rgba) {
+    const cv::Mat panel = shot(cv::Rect(shot.cols - demo::TrackerPanel::kWidth, 0, demo::TrackerPanel::kWidth, shot.rows));
+    const cv::Vec3b bgr(rgba[2], rgba[1], rgba[0]);
+    cv::Mat mask;
+    cv::inRange(panel, bgr - cv::Vec3b(8, 8, 8), bgr + cv::Vec3b(8, 8, 8), mask);
+    return mask;
+}
+
+/// The app headless on `clip` for `frames` frames with `options`: its last frame's screenshot.
+cv::Mat appScreenshot(const std::string& clip, int frames, const std::string& options) {
+    const auto shot = std::filesystem::temp_directory_path() / ("facetrack_app_" + std::to_string(::getpid()) + ".png");
+    const auto run = test::runCommand(demo(), "--headless --input '" + clip + "' --frames " + std::to_string(frames) + " " + options +
+                                                  " --screenshot '" + shot.string() + "'");
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    const cv::Mat image = cv::imread(shot.string());
+    std::filesystem::remove(shot);
+    return image;
+}
+
+// The side panel: 52 outlined bars; with the face gone, the face-lost box; while the guided
+// calibration runs, its prompt; neither when a face is followed and nothing is being calibrated.
+TEST(Demo, ThePanelShowsEveryShapeTheLostFaceAndTheCalibrationPrompt) {
+    FACETRACK_REQUIRE_SHARED();
+    FACETRACK_REQUIRE_DISPLAY();
+    const std::string clip = (std::filesystem::temp_directory_path() / ("facetrack_leaves_" + std::to_string(::getpid()) + ".avi"))
+                                 .string();
+    {
+        cv::VideoWriter writer(clip, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 30.0, cv::Size(400, 300));
+        ASSERT_TRUE(writer.isOpened());
+        for (const auto& f : test::clipFrames(30)) writer.write(f);
+        for (int i = 0; i < 20; ++i) writer.write(cv::Mat(300, 400, CV_8UC3, cv::Scalar(0, 0, 0)));
+    }
+    const std::string profile = (std::filesystem::temp_directory_path() / ("facetrack_app_profile_" + std::to_string(::getpid()) + ".json"))
+                                    .string();
+    const cv::Mat followed = appScreenshot(clip, 30, "--profile '" + profile + "'");
+    const cv::Mat lost = appScreenshot(clip, 50, "--profile '" + profile + "' --guided-calibration");
+    std::filesystem::remove(clip);
+    EXPECT_FALSE(std::filesystem::exists(profile)) << "nothing was saved";
+    ASSERT_FALSE(followed.empty());
+    ASSERT_FALSE(lost.empty());
+
+    for (const cv::Mat* shot : {&followed, &lost}) {
+        cv::Mat labels, stats, centroids;
+        const int n = cv::connectedComponentsWithStats(panelPixelsOf(*shot, demo::TrackerPanel::kBarOutline), labels, stats, centroids, 8);
+        int bars = 0;
+        for (int i = 1; i < n; ++i) {
+            const int w = stats.at<int>(i, cv::CC_STAT_WIDTH), h = stats.at<int>(i, cv::CC_STAT_HEIGHT);
+            bars += w >= 30 && h >= 8 && h <= 12;  // an outline of a bar
+        }
+        EXPECT_EQ(bars, kArkitBlendshapeCount);
+    }
+    const auto area = [](const cv::Mat& shot, const std::array<unsigned char, 4>& colour) {
+        return cv::countNonZero(panelPixelsOf(shot, colour));
+    };
+    EXPECT_GT(area(lost, demo::TrackerPanel::kFaceLost), 5000);
+    EXPECT_GT(area(lost, demo::TrackerPanel::kPrompt), 5000);
+    EXPECT_EQ(area(followed, demo::TrackerPanel::kFaceLost), 0);
+    EXPECT_EQ(area(followed, demo::TrackerPanel::kPrompt), 0);
+}
+
+// The guided calibration, fed frames: each prompt in turn, the neutral and a full smile measured,
+// the result handed to the tracker at the end.
+TEST(GuidedCalibration, StepsThroughThePromptsAndCalibratesTheTracker) {
+    FACETRACK_REQUIRE_SHARED();
+    Tracker tracker(Models::loadDefault());
+    demo::GuidedCalibration guided;
+    EXPECT_FALSE(guided.update(tracker, {}, 0.0));  // not started
+    guided.start(tracker);
+    ASSERT_TRUE(guided.running());
+    const auto smile = static_cast<std::size_t>(arkitIndex("mouthSmileLeft"));
+    const double perPrompt = demo::GuidedCalibration::kSecondsPerPrompt;
+    bool done = false;
+    std::vector<std::string> seen;
+    for (int f = 0; !done && f < 30 * 60; ++f) {
+        const double t = 10.0 + f / 30.0;
+        const std::size_t prompt = static_cast<std::size_t>(f / 30.0 / perPrompt);
+        FrameResult frame;
+        frame.faces.emplace_back().expression.emplace();
+        // A smile of 0.1 at rest, 0.6 when asked for; and the first half-second of each prompt still the one before.
+        const double within = f / 30.0 - static_cast<double>(prompt) * perPrompt;
+        const bool smiling = prompt == 1 || (prompt == 2 && within < 0.5);
+        frame.faces[0].expression->arkit[smile] = smiling ? 0.6f : 0.1f;
+        done = guided.update(tracker, frame, t);
+        if (guided.step() && (seen.empty() || seen.back() != guided.step()->instruction)) seen.push_back(guided.step()->instruction);
+    }
+    ASSERT_TRUE(done);
+    EXPECT_FALSE(guided.running());
+    EXPECT_EQ(seen.size(), calibrationPrompts().size());
+    EXPECT_EQ(seen[1], calibrationPrompts()[1].instruction);
+    const ShapeCalibration s = tracker.calibration().shapes[smile];
+    EXPECT_FLOAT_EQ(s.neutral, 0.1f);
+    EXPECT_FLOAT_EQ(s.full, 0.6f);
+    EXPECT_EQ(tracker.calibration().shapes[static_cast<std::size_t>(arkitIndex("jawOpen"))].full, 1.f);  // never shown: unchanged
 }
 
 }  // namespace

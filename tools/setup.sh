@@ -9,8 +9,8 @@ packages=(
   cmake g++ make pkg-config clang-format
   # libraries the library links
   libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev
-  # demo: window, GL maths, camera
-  libglfw3-dev libglm-dev libv4l-dev libgl-dev libgl1-mesa-dri
+  # demo: window, GL maths, camera, the side panel (Dear ImGui)
+  libglfw3-dev libglm-dev libv4l-dev libgl-dev libgl1-mesa-dri libimgui-dev
   # tools and tests
   nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
   # detector fallback (Haar cascades) and peers for evaluation (dlib's 68-point model)

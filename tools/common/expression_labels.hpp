@@ -10,9 +10,9 @@
 namespace facetrack::tools {
 
 struct LabelledSegment {
-    std::string clip;          ///< a file name of ../shared/data/clips
-    int first = 0, last = 0;   ///< frames, 0-based in decode order, inclusive
-    std::string label;         ///< "neutral", "smile", "pucker", ...
+    std::string clip;         ///< a file name of ../shared/data/clips
+    int first = 0, last = 0;  ///< frames, 0-based in decode order, inclusive
+    std::string label;        ///< "neutral", "smile", "pucker", ...
 };
 
 /// Every segment of the file, in its order ('#' lines and the header skipped).

@@ -212,7 +212,9 @@ const std::vector<CalibrationPrompt>& calibrationPrompts() {
 
 CalibrationCapture::CalibrationCapture(Calibration base) : base_(std::move(base)), frames_(calibrationPrompts().size()) { validate(base_); }
 
-void CalibrationCapture::add(const std::string& prompt, const ExpressionResult& weights) { frames_[promptIndex(prompt)].push_back(weights); }
+void CalibrationCapture::add(const std::string& prompt, const ExpressionResult& weights) {
+    frames_[promptIndex(prompt)].push_back(weights);
+}
 
 int CalibrationCapture::frames(const std::string& prompt) const { return static_cast<int>(frames_[promptIndex(prompt)].size()); }
 
