@@ -130,7 +130,8 @@ PanelClicks TrackerPanel::draw(const FaceResult* face, PanelState& state, int x,
     }
     if (face && face->pose) {
         const Vec3 e = face->pose->euler_deg;
-        std::snprintf(line, sizeof line, "head pitch %+.0f yaw %+.0f roll %+.0f  %.0f cm", e.x, e.y, e.z, face->pose->translation_mm.z / 10.f);
+        std::snprintf(line, sizeof line, "head pitch %+.0f yaw %+.0f roll %+.0f  %.0f cm", e.x, e.y, e.z,
+                      face->pose->translation_mm.z / 10.f);
         if (face->gaze) {
             const GazeResult& g = *face->gaze;
             const std::string head = line;
