@@ -12,6 +12,7 @@
 #include "app/args.hpp"
 #include "app/image_view.hpp"
 #include "app/media.hpp"
+#include "app/process_cpu.hpp"
 #include "app/tool_main.hpp"
 #include "app/tracking_options.hpp"
 #include "facetrack/facetrack.hpp"
@@ -22,8 +23,6 @@
 #include <GLFW/glfw3.h>
 
 #include <opencv2/imgcodecs.hpp>
-
-#include <sys/resource.h>
 
 #include <chrono>
 #include <filesystem>
@@ -71,7 +70,8 @@ void onKey(GLFWwindow* window, int key, int, int action, int) {
     if (controls.quit) glfwSetWindowShouldClose(window, GLFW_TRUE);
 }
 
-CaptureSettings captureSettings(const tools::Args& args) {
+/// --size, --fps and --format: the mode asked of any camera the app opens.
+CaptureSettings captureMode(const tools::Args& args) {
     CaptureSettings settings;
     const cv::Size size = tools::parseSize(args.get("--size", "640x480"));
     settings.width = size.width;
@@ -82,6 +82,12 @@ CaptureSettings captureSettings(const tools::Args& args) {
     else if (format == "yuyv") settings.format = CaptureFormat::Yuyv;
     else if (format == "mjpeg") settings.format = CaptureFormat::Mjpeg;
     else throw Error("--format must be auto, yuyv or mjpeg, not '" + format + "'");
+    return settings;
+}
+
+/// The camera to open at start: --camera, else the first /dev/video*, else an error naming --input.
+CaptureSettings captureSettings(const tools::Args& args) {
+    CaptureSettings settings = captureMode(args);
     if (args.has("--camera")) {
         settings.device = args.get("--camera");
     } else {
@@ -156,13 +162,6 @@ void syncSenders(std::vector<SenderToggle>& toggles, std::vector<std::unique_ptr
     }
 }
 
-double cpuSeconds() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
-
 int run(int argc, char** argv) {
     const tools::Args args(std::vector<std::string>(argv + 1, argv + argc),
                            tools::trackingOptions({"--camera", "--size", "--fps", "--format", "--input", "--frames", "--screenshot",
@@ -185,7 +184,7 @@ int run(int argc, char** argv) {
     std::error_code ec;
     if (given != "none" && std::filesystem::exists(profile, ec)) tracker.setCalibration(loadCalibration(profile));
 
-    const bool fromCamera = !args.has("--input");
+    bool fromCamera = !args.has("--input");
     CaptureSettings settings;
     tools::MediaReader reader;
     if (fromCamera) {
@@ -213,6 +212,9 @@ int run(int argc, char** argv) {
     state.senders = std::move(toggles);
     for (const auto& name : tracker.estimatedShapes()) state.estimated[static_cast<std::size_t>(arkitIndex(name))] = true;
     state.calibration_note = tracker.calibration() == Calibration{} ? "not calibrated; profile " + profile : "calibrated from " + profile;
+    state.cameras = CameraCapture::listDevices();
+    for (std::size_t i = 0; i < state.cameras.size(); ++i)
+        if (fromCamera && state.cameras[i] == settings.device) state.camera = static_cast<int>(i);
     std::vector<std::unique_ptr<send::Sender>> senders;
     send::FaceLossEasing avatarEasing;
     GuidedCalibration guided;
@@ -222,7 +224,7 @@ int run(int argc, char** argv) {
     const auto started = Clock::now();
     const double firstFrameTime = frame.time_s;
     auto lastTracked = Clock::now(), readAt = Clock::now(), cpuAt = Clock::now();
-    double cpuThen = cpuSeconds(), lostSince = -1.0;
+    double cpuThen = tools::processCpuSeconds(), lostSince = -1.0;
     Hud hud;
     FrameResult result;  // reused frame to frame: tracking allocates nothing once a face is followed
     const FaceResult* avatar = nullptr;
@@ -305,7 +307,7 @@ int run(int argc, char** argv) {
             if (!keys.paused) continue;  // the clip's next frame is not due yet
         }
         if (const double wall = std::chrono::duration<double>(Clock::now() - cpuAt).count(); wall >= 1.0) {
-            const double cpu = cpuSeconds();
+            const double cpu = tools::processCpuSeconds();
             state.cpu_percent = 100.0 * (cpu - cpuThen) / wall;
             cpuThen = cpu;
             cpuAt = Clock::now();
@@ -319,9 +321,26 @@ int run(int argc, char** argv) {
         }
         gl.beginFrame(0.16f, 0.17f, 0.20f);
         view.draw(shown, result, avatar, hud, keys.mirror);
+        state.mirror = keys.mirror;
         const PanelClicks clicks = sidePanel.draw(result.faces.empty() ? nullptr : &result.faces.front(), state, view.width(), gl.width(),
                                                   gl.height());
         gl.endFrame();
+        keys.mirror = state.mirror;
+        if (clicks.camera) {  // another camera picked in the panel: it replaces the input
+            CaptureSettings chosen = captureMode(args);
+            chosen.device = state.cameras[static_cast<std::size_t>(state.camera)];
+            try {
+                reader = tools::MediaReader::openCamera(chosen);
+                settings = chosen;
+                fromCamera = true;
+                pending = false;
+                stopped.clear();
+                tracker.reset();
+                std::cerr << "facetrack_demo: " << reader.describe() << '\n';
+            } catch (const Error& e) {
+                state.calibration_note = e.what();
+            }
+        }
         if (clicks.neutral) {
             tracker.calibrateNeutral();
             state.calibration_note = "neutral taken from this frame (Save profile keeps it)";

@@ -118,6 +118,20 @@ PanelClicks TrackerPanel::draw(const FaceResult* face, PanelState& state, int x,
 
     std::snprintf(line, sizeof line, "%.1f fps   latency %.1f ms   CPU %.0f %% of a core", state.fps, state.latency_ms, state.cpu_percent);
     ImGui::TextUnformatted(line);
+    ImGui::SameLine(static_cast<float>(kWidth) - 190.f);
+    ImGui::SetNextItemWidth(180.f);
+    const char* inUse = state.camera >= 0       ? state.cameras[static_cast<std::size_t>(state.camera)].c_str()
+                        : state.cameras.empty() ? "no camera"
+                                                : "a clip; pick a camera";
+    if (ImGui::BeginCombo("##camera", inUse)) {
+        for (std::size_t i = 0; i < state.cameras.size(); ++i) {
+            if (ImGui::Selectable(state.cameras[i].c_str(), static_cast<int>(i) == state.camera) && static_cast<int>(i) != state.camera) {
+                state.camera = static_cast<int>(i);
+                clicks.camera = true;
+            }
+        }
+        ImGui::EndCombo();
+    }
     if (state.lost_for_s >= 0.0) {
         std::snprintf(line, sizeof line, "FACE LOST  %.1f s: the avatar relaxes to rest", state.lost_for_s);
         statusBox(line, colour(kFaceLost), IM_COL32(255, 255, 255, 255));
@@ -154,6 +168,8 @@ PanelClicks TrackerPanel::draw(const FaceResult* face, PanelState& state, int x,
         ImGui::SameLine();
         clicks.reset = ImGui::Button("Reset");
     }
+    ImGui::SameLine(static_cast<float>(kWidth) - 80.f);
+    ImGui::Checkbox("mirror", &state.mirror);
     if (state.prompt) {
         const GuidedCalibration::Step& p = *state.prompt;
         std::snprintf(line, sizeof line, "%zu/%zu  %s%s", p.index + 1, p.count, p.instruction.c_str(), p.measuring ? "" : "  (get ready)");

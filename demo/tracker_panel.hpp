@@ -1,8 +1,8 @@
 #pragma once
 // The app's side panel (Dear ImGui), right of the camera and the avatar:
-// fps, latency and CPU; whether the face is followed or lost; head pose and
+// fps, latency and CPU; the camera; whether the face is followed or lost; head pose and
 // gaze; the calibration (neutral now, the guided capture with its prompt,
-// save, reset); a toggle and destination per protocol to send; and a bar per
+// save, reset) and mirroring; a toggle and destination per protocol to send; and a bar per
 // ARKit shape, grouped (eyes; brows, jaw, cheeks, nose and tongue; mouth),
 // each with its calibrated value as the bar and its raw value (before the
 // filter and the calibration) as a tick.
@@ -36,11 +36,15 @@ struct PanelState {
     std::string calibration_note;  ///< the profile in use, or the last capture's outcome
     std::optional<GuidedCalibration::Step> prompt;
     std::vector<SenderToggle> senders;
+    bool mirror = false;               ///< edited by the panel
+    std::vector<std::string> cameras;  ///< the /dev/video* there are
+    int camera = -1;                   ///< the one in use (an index into cameras; -1: a clip), edited by the panel
 };
 
 /// Buttons pressed in this frame.
 struct PanelClicks {
     bool neutral = false, guided = false, cancel_guided = false, save = false, reset = false;
+    bool camera = false;  ///< another camera was picked (PanelState::camera)
 };
 
 class TrackerPanel {

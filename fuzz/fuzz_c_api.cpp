@@ -7,9 +7,11 @@
 // indices out of range, a tracker created from a fuzzed configuration.
 //
 // Input: a 32-byte header, then the pixels.
-//   [0]      the call (modulo 8): process, face, reset, reset identity,
+//   [0]      the call (modulo 10): process, face, reset, reset identity,
 //            calibrate neutral, reset neutral, estimated shapes, create a
-//            tracker from a fuzzed configuration and process one frame with it
+//            tracker from a fuzzed configuration and process one frame with it,
+//            a calibration profile's JSON (the bytes after the header as text),
+//            one shape's calibration (index [15], values [16..31] as four floats)
 //   [1]      flags: bit 0 NULL tracker, bit 1 NULL result or face, bit 2 NULL pixels
 //   [2..3]   struct_size's offset from the struct's own size (int16)
 //   [4..7]   width (int32), [8..11] height (int32; cut to the rows the bytes hold)
@@ -30,6 +32,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 
 namespace {
 
@@ -150,6 +153,43 @@ void createAndProcess(const std::uint8_t* header, const std::uint8_t* pixels, st
     std::free(config);
 }
 
+/// A profile's JSON from the fuzzer: refused, or taken and read back as JSON that is taken again.
+void setCalibrationJson(ft_tracker* t, const std::uint8_t* text, std::size_t size) {
+    std::string json(reinterpret_cast<const char*>(text), size);  // NUL-terminated, whatever the bytes hold
+    const ft_status s = ft_tracker_set_calibration_json(t, json.c_str());
+    requireStatus(s);
+    if (s != FT_OK) return;
+    std::uint32_t needed = 0;
+    require(ft_tracker_calibration_json(t, nullptr, 0, &needed) == FT_INVALID_ARGUMENT && needed > 0, "no size for the JSON");
+    std::string back(needed, '\0');
+    require(ft_tracker_calibration_json(t, back.data(), needed, nullptr) == FT_OK, "a calibration taken is not written back");
+    require(ft_tracker_set_calibration_json(t, back.c_str()) == FT_OK, "a calibration written back is refused");
+}
+
+/// One shape's calibration from the fuzzer (the header's floats): refused, or taken and read back in range.
+void setShapeCalibration(ft_tracker* t, const std::uint8_t* header) {
+    ft_shape_calibration* shape = (header[1] & 2) ? nullptr
+                                                  : allocate<ft_shape_calibration>(
+                                                        claimedSize(sizeof(ft_shape_calibration), read<std::int16_t>(header + 2)));
+    if (shape) {
+        const std::uint32_t size = shape->struct_size;
+        ft_shape_calibration given{};
+        given.struct_size = size;
+        given.neutral = read<float>(header + 16), given.full = read<float>(header + 20);
+        given.gain = read<float>(header + 24), given.dead_zone = read<float>(header + 28);
+        std::memcpy(static_cast<void*>(shape), &given, std::min<std::size_t>(size, sizeof given));
+    }
+    const auto index = static_cast<std::int8_t>(header[15]);
+    requireStatus(ft_tracker_set_shape_calibration(t, index, shape));
+    ft_shape_calibration back{};
+    back.struct_size = sizeof back;
+    if (t && ft_tracker_shape_calibration(t, index, &back) == FT_OK) {
+        require(back.neutral >= 0.f && back.neutral < back.full && back.full <= 1.f, "a shape's calibration out of range");
+        require(back.gain > 0.f && back.gain <= 10.f && back.dead_zone >= 0.f && back.dead_zone < 1.f, "a gain or dead zone out of range");
+    }
+    std::free(shape);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -158,7 +198,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::uint8_t* pixels = size > kHeader ? data + kHeader : nullptr;
     const std::size_t available = size - kHeader;
     ft_tracker* t = (data[1] & 1) ? nullptr : tracker();
-    switch (data[0] % 8) {
+    switch (data[0] % 10) {
         case 0:
             process(tracker(), data, pixels, available);
             break;
@@ -188,8 +228,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             requireStatus(ft_tracker_estimated_shapes(t, (data[1] & 2) ? nullptr : estimated));
             break;
         }
-        default:
+        case 7:
             createAndProcess(data, pixels, available);
+            break;
+        case 8:
+            if (t) setCalibrationJson(t, data + kHeader, available);
+            break;
+        default:
+            setShapeCalibration(t, data);
             break;
     }
     const char* error = ft_tracker_last_error(t);

@@ -64,6 +64,10 @@ capi calibrate_neutral 4 0 0 0 0 0 $defaults /dev/null
 capi estimated 6 0 0 0 0 0 $defaults /dev/null
 capi create_and_process 7 0 160 120 0 0 $defaults "$tmp/face_gray.raw"
 capi create_older_config 7 -12 96 72 1 0 2,1,0,90,60,0,5,20 "$tmp/face_bgr.raw"
+printf '{"format": "facetrack-calibration", "version": 1, "shapes": {"jawOpen": {"neutral": 0.05, "full": 0.6, "gain": 1.5, "dead_zone": 0.1}}, "native_neutral": [], "identity": []}' > "$tmp/profile.json"
+capi calibration_json 8 0 0 0 0 0 $defaults "$tmp/profile.json"
+/usr/bin/python3 -c 'import struct, sys
+sys.stdout.buffer.write(struct.pack("<BBhiihbb4f", 9, 0, 0, 0, 0, 0, 0, 17, 0.05, 0.6, 1.5, 0.1))' > "$corpus/fuzz_c_api/shape_calibration"
 
 # Datagrams: the two handshakes and a near miss.
 printf 'iFacialMocap_sahuasouryya9218sauhuiayeta91555dy3719' > "$corpus/fuzz_handshake/v1"

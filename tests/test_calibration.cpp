@@ -58,6 +58,7 @@ TEST(Calibration, RefusesValuesOutOfRangeNamingTheShape) {
     refused([](Calibration& c) { c.shapes[shape("cheekPuff")].dead_zone = 1.f; }, "cheekPuff dead_zone");
     refused([](Calibration& c) { c.native_neutral = {0.1f, 1.2f}; }, "native_neutral");
     refused([](Calibration& c) { c.identity = {0.5f, INFINITY}; }, "identity");
+    refused([](Calibration& c) { c.identity = {0.5f, -11.f}; }, "identity");
 }
 
 TEST(Calibration, JsonReadsBackExactlyAndLeavesDefaultsOut) {

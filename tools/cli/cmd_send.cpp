@@ -8,7 +8,7 @@
 
 #include "facetrack/async_tracker.hpp"
 
-#include <sys/resource.h>
+#include "app/process_cpu.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -43,13 +43,6 @@ docs/embedding.md says how to set up each app.)";
 
 volatile std::sig_atomic_t g_interrupted = 0;
 void onInterrupt(int) { g_interrupted = 1; }
-
-double cpuSeconds() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
 
 /// --camera DEVICE [--size WxH] [--fps F], checked before anything opens.
 CaptureSettings cameraSettings(const Args& args) {
@@ -108,7 +101,7 @@ int runSend(const std::vector<std::string>& argv) {
     std::signal(SIGINT, onInterrupt);
     std::signal(SIGTERM, onInterrupt);
     const auto start = std::chrono::steady_clock::now();
-    const double cpuStart = cpuSeconds();
+    const double cpuStart = tools::processCpuSeconds();
     AsyncResult latest;
     std::vector<double> latencyMs;
     long withFace = 0, frames = 0;
@@ -138,7 +131,7 @@ int runSend(const std::vector<std::string>& argv) {
                  "facetrack send: %ld frames sent (a face in %ld) in %.1f s, %ld datagrams, %ld bytes, %ld not sent; "
                  "read %ld, dropped %ld; capture to sent p50 %.2f ms, p99 %.2f ms; CPU %.0f %% of one core\n",
                  frames, withFace, wall, s.datagrams, s.bytes, s.failed, t.frames_read, t.frames_dropped, percentile(latencyMs, 0.5),
-                 percentile(latencyMs, 0.99), wall > 0 ? 100.0 * (cpuSeconds() - cpuStart) / wall : 0.0);
+                 percentile(latencyMs, 0.99), wall > 0 ? 100.0 * (tools::processCpuSeconds() - cpuStart) / wall : 0.0);
     if (!t.error.empty()) throw Error(t.error);
     return 0;
 }

@@ -45,8 +45,9 @@ struct Calibration {
     /// order), each reported as clamp((w - w0) / (1 - w0), 0, 1) (range, gain and
     /// dead zone act on the ARKit weights only). Empty: passed through.
     std::vector<float> native_neutral;
-    /// The user's identity coefficients (FaceResult::identity). Empty: the
-    /// Tracker estimates them from the first frames (TrackerConfig::calibration_frames).
+    /// The user's identity coefficients (FaceResult::identity; standard deviations
+    /// of the model's identity modes, each within +-10). Empty: the Tracker
+    /// estimates them from the first frames (TrackerConfig::calibration_frames).
     std::vector<float> identity;
 
     bool operator==(const Calibration& o) const {

@@ -24,6 +24,9 @@ using Json = nlohmann::ordered_json;
 constexpr const char* kFormat = "facetrack-calibration";
 constexpr int kVersion = 1;
 constexpr float kMaxGain = 10.f;
+// Identity coefficients are in standard deviations of the model's identity modes: a face this far
+// from the mean is no face, and the fit would not stay finite on it.
+constexpr float kMaxIdentity = 10.f;
 // A prompted shape must rise this far above its neutral for the capture to
 // take its full value: less is a user who did not make the expression, or a
 // shape no stage estimates.
@@ -82,7 +85,7 @@ void validate(const Calibration& calibration) {
     for (float w : calibration.native_neutral)
         if (!(w >= 0.f && w < 1.f)) throw Error("calibration: native_neutral values must be in [0, 1)");
     for (float c : calibration.identity)
-        if (!std::isfinite(c)) throw Error("calibration: identity values must be finite");
+        if (!(std::abs(c) <= kMaxIdentity)) throw Error("calibration: identity values must be within +-10 (standard deviations)");
 }
 
 float calibrated(const ShapeCalibration& shape, float w) {
