@@ -4,6 +4,7 @@
 #include "facetrack/async_tracker.hpp"
 
 #include "core/image.hpp"
+#include "facetrack/arkit.hpp"
 #include "facetrack/error.hpp"
 #include "test_support.hpp"
 
@@ -189,6 +190,38 @@ TEST(AsyncTracker, WaitForNewerHandsOverTheResultsOfAPacedClipInOrderThenTimesOu
     const auto start = Clock::now();
     EXPECT_FALSE(tracking.waitForNewer(latest, 5.0));  // finished: returns at once, not after 5 s
     EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 0.5);
+}
+
+// The calibration from the application's thread: checked at once, applied before the next
+// frame; a neutral taken from the face as tracked; the identity in calibration() once estimated.
+TEST(AsyncTracker, TakesACalibrationAndANeutralFromTheApplicationsThread) {
+    FACETRACK_REQUIRE_SHARED();
+    const auto frames = clipFrames(60);
+    AsyncTracker tracking(Models::loadDefault(), {}, std::make_unique<FakeCamera>(frames, std::chrono::milliseconds(10), 400));
+    const auto waitFor = [&](const auto& done) {  // true as soon as done() is, false after 60 s
+        for (const auto deadline = Clock::now() + std::chrono::seconds(60); Clock::now() < deadline;) {
+            if (done()) return true;
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        return false;
+    };
+    Calibration c;
+    c.shapes[static_cast<std::size_t>(arkitIndex("jawOpen"))] = {0.f, 0.5f, 1.f, 0.f};
+    Calibration bad = c;
+    bad.native_neutral = {0.1f};  // not the face model's size
+    EXPECT_THROW(tracking.setCalibration(bad), Error);
+    tracking.setCalibration(c);
+    ASSERT_TRUE(waitFor([&] { return tracking.calibration().shapes == c.shapes; }));
+    AsyncResult latest;
+    ASSERT_TRUE(waitFor([&] { return tracking.latest(latest) && !latest.result.faces.empty(); }));
+    tracking.calibrateNeutral();
+    const auto neutralTaken = [&] {
+        const Calibration now = tracking.calibration();
+        return !now.native_neutral.empty() && now.shapes[static_cast<std::size_t>(arkitIndex("jawOpen"))].full == 0.5f;
+    };
+    EXPECT_TRUE(waitFor(neutralTaken));
+    // 30 samples 5 frames apart: the identity once the tracker has it.
+    EXPECT_TRUE(waitFor([&] { return !tracking.calibration().identity.empty(); }));
 }
 
 TEST(AsyncTracker, StopsCleanlyMidStream) {

@@ -103,6 +103,18 @@ public:
     /// Returns false on timeout or once tracking has finished with nothing newer.
     bool waitForNewer(AsyncResult& out, double timeout_s) const;
     AsyncStats stats() const;
+
+    /// The user's calibration (Tracker::setCalibration), checked now (Error on a
+    /// bad value or size; nothing changes) and applied by the tracking thread
+    /// before its next frame.
+    void setCalibration(const Calibration& calibration);
+    /// Tracker::calibrateNeutral() before the next frame: the neutral of the
+    /// first face as last tracked (ask the user to relax first).
+    void calibrateNeutral();
+    /// The calibration in use as of the last tracked frame, with the identity
+    /// once estimated (Tracker::calibration); a request not yet applied is not in it.
+    Calibration calibration() const;
+
     /// Stops reading and tracking; later calls do nothing. latest() keeps the last result.
     void stop();
 

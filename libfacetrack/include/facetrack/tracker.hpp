@@ -104,6 +104,10 @@ struct TrackerConfig {
 /// constructor does: settings can be checked before anything is loaded or opened.
 void validate(const TrackerConfig& config);
 
+/// Throws Error naming the first value of `calibration` out of range (validate(Calibration))
+/// or a native neutral or identity whose size is not `face`'s, as Tracker::setCalibration does.
+void validate(const Calibration& calibration, const FaceModel& face);
+
 /// One Tracker follows the faces of one video stream. It is not thread-safe:
 /// use one per stream (or thread) and share the immutable models between them.
 class Tracker {

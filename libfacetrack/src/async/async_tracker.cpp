@@ -12,7 +12,9 @@
 #include <condition_variable>
 #include <cstring>
 #include <mutex>
+#include <optional>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace facetrack {
@@ -42,6 +44,7 @@ struct AsyncTracker::Impl {
     Impl(Models models, const TrackerConfig& config, std::unique_ptr<FrameSource> s, const AsyncOptions& o)
         : tracker(std::move(models), config), source(std::move(s)), options(o) {
         tracker.setCalibration(options.calibration);
+        in_use = options.calibration;
     }
 
     Tracker tracker;
@@ -65,11 +68,49 @@ struct AsyncTracker::Impl {
     bool finished = false;
     std::string track_error;
 
+    // The application -> tracking: calibration requests, applied before the next frame.
+    mutable std::mutex calibration_mutex;
+    std::optional<Calibration> requested;
+    bool neutral_requested = false;
+    Calibration in_use;            ///< as of the last frame: what calibration() returns
+    bool identity_in_use = false;  ///< the last frame's first face had its identity estimated
+
     std::thread reader, worker;
 
     void read();
     void track();
+    /// Before a frame: the requests taken and applied, in_use refreshed when they changed it.
+    void applyCalibrationRequests();
+    /// After a frame: in_use refreshed when the first face's identity was just estimated.
+    void noteIdentity(const FrameResult& result);
 };
+
+void AsyncTracker::Impl::applyCalibrationRequests() {
+    std::optional<Calibration> given;
+    bool neutral = false;
+    {
+        std::lock_guard<std::mutex> lock(calibration_mutex);
+        if (!requested && !neutral_requested) return;
+        given.swap(requested);
+        neutral = std::exchange(neutral_requested, false);
+    }
+    if (given) tracker.setCalibration(*given);  // checked when it was requested
+    if (neutral) tracker.calibrateNeutral();
+    Calibration now = tracker.calibration();
+    std::lock_guard<std::mutex> lock(calibration_mutex);
+    in_use = std::move(now);
+}
+
+void AsyncTracker::Impl::noteIdentity(const FrameResult& result) {
+    // Kept when the face is lost: a profile saved then still has the user's identity.
+    const bool estimated = !result.faces.empty() && result.faces.front().identity_calibrated;
+    const bool fresh = estimated && !identity_in_use;
+    identity_in_use = estimated;
+    if (!fresh) return;
+    Calibration now = tracker.calibration();
+    std::lock_guard<std::mutex> lock(calibration_mutex);
+    in_use = std::move(now);
+}
 
 void AsyncTracker::Impl::read() {
     const bool paced = !source->live() && options.realtime;
@@ -138,7 +179,9 @@ void AsyncTracker::Impl::track() {
         frame_taken.notify_one();
         try {
             if (source->separateScenes()) tracker.reset();
+            applyCalibrationRequests();
             tracker.process(working.view, working.time_s, next.result);
+            noteIdentity(next.result);
         } catch (const std::exception& e) {
             error = e.what();
             break;
@@ -186,6 +229,22 @@ void AsyncTracker::stop() {
     impl_->frame_taken.notify_all();
     if (impl_->reader.joinable()) impl_->reader.join();
     if (impl_->worker.joinable()) impl_->worker.join();
+}
+
+void AsyncTracker::setCalibration(const Calibration& calibration) {
+    validate(calibration, *impl_->tracker.models().face);  // the models are immutable: safe from any thread
+    std::lock_guard<std::mutex> lock(impl_->calibration_mutex);
+    impl_->requested = calibration;
+}
+
+void AsyncTracker::calibrateNeutral() {
+    std::lock_guard<std::mutex> lock(impl_->calibration_mutex);
+    impl_->neutral_requested = true;
+}
+
+Calibration AsyncTracker::calibration() const {
+    std::lock_guard<std::mutex> lock(impl_->calibration_mutex);
+    return impl_->in_use;
 }
 
 bool AsyncTracker::latest(AsyncResult& out) const {

@@ -134,9 +134,8 @@ Calibration Tracker::calibration() const {
     return out;
 }
 
-void Tracker::setCalibration(const Calibration& calibration) {
+void validate(const Calibration& calibration, const FaceModel& face) {
     validate(calibration);
-    const FaceModel& face = *impl_->models.face;
     if (!calibration.native_neutral.empty() && calibration.native_neutral.size() != face.expressionNames().size()) {
         throw Error("calibration: native_neutral has " + std::to_string(calibration.native_neutral.size()) + " weights, the face model " +
                     std::to_string(face.expressionNames().size()));
@@ -145,6 +144,10 @@ void Tracker::setCalibration(const Calibration& calibration) {
         throw Error("calibration: identity has " + std::to_string(calibration.identity.size()) + " coefficients, the face model " +
                     std::to_string(face.identityCount()));
     }
+}
+
+void Tracker::setCalibration(const Calibration& calibration) {
+    validate(calibration, *impl_->models.face);
     impl_->core.setCalibration(calibration);
     impl_->calibration = calibration;
 }
