@@ -163,6 +163,7 @@ void Tracker::resetNeutral() {
     next.native_neutral.clear();
     setCalibration(next);
 }
+
 std::vector<StageInfo> Tracker::stages() const { return impl_->core.stages(); }
 
 std::vector<std::string> Tracker::estimatedShapes() const {
