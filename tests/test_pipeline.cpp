@@ -426,12 +426,17 @@ TEST(CalibrationStage, AppliesTheCalibrationAndCapturesTheNeutralItWasGiven) {
     const auto state = stage->newFaceState();
     const auto smile = static_cast<std::size_t>(arkitIndex("mouthSmileLeft")), look = static_cast<std::size_t>(arkitIndex("eyeLookInLeft"));
     const cv::Mat gray(8, 8, CV_8UC1, cv::Scalar(0));
+    const auto& natives = model->expressionNames();
+    const auto smileNative = static_cast<std::size_t>(std::find(natives.begin(), natives.end(), "mouthSmile_L") - natives.begin());
+    ASSERT_LT(smileNative, natives.size());
+    ASSERT_NE(smileNative, 0u);
     const pipeline::FrameInput frame{{}, gray, {}, 1.0 / 30};
     pipeline::FaceTrack face;
     const auto run = [&](float smileWeight) {
         face.result.expression.emplace();
         face.result.expression->native.assign(model->expressionNames().size(), 0.f);
         face.result.expression->native[0] = smileWeight;
+        face.result.expression->native[smileNative] = smileWeight;
         face.result.expression->arkit[smile] = smileWeight;
         face.result.expression->arkit[look] = 0.3f;
         EXPECT_EQ(stage->run(frame, face, state.get()), pipeline::Outcome::Ok);
@@ -448,8 +453,9 @@ TEST(CalibrationStage, AppliesTheCalibrationAndCapturesTheNeutralItWasGiven) {
     stage->setCalibration(calibration, {state.get()});
     EXPECT_FLOAT_EQ(run(0.2f).arkit[smile], 0.f);
     auto w = run(0.4f);
-    EXPECT_FLOAT_EQ(w.arkit[smile], 0.5f);      // half way from the neutral to the full
-    EXPECT_FLOAT_EQ(w.native[0], 0.2f / 0.8f);  // native: from the neutral to 1
+    EXPECT_FLOAT_EQ(w.arkit[smile], 0.5f);         // half way from the neutral to the full
+    EXPECT_FLOAT_EQ(w.native[0], 0.2f / 0.8f);     // a native weight: from its neutral to its ARKit shape's full (1 here)
+    EXPECT_FLOAT_EQ(w.native[smileNative], 0.5f);  // the smile's own: to the smile's full, as the avatar must move
     EXPECT_FLOAT_EQ(w.arkit[look], 0.3f);
     EXPECT_FLOAT_EQ(run(0.1f).arkit[smile], 0.f);  // below the neutral: clamped
     EXPECT_FLOAT_EQ(run(0.9f).arkit[smile], 1.f);  // beyond the full: clamped

@@ -42,8 +42,8 @@ struct Calibration {
     /// One per ARKit shape, in arkitNames() order.
     std::array<ShapeCalibration, kArkitBlendshapeCount> shapes{};
     /// The face model's own weights on the relaxed face (FaceModel::expressionNames()
-    /// order), each reported as clamp((w - w0) / (1 - w0), 0, 1) (range, gain and
-    /// dead zone act on the ARKit weights only). Empty: passed through.
+    /// order; empty: all 0). Each native weight is reported with its own neutral
+    /// and the full value, gain and dead zone of the ARKit shape it drives.
     std::vector<float> native_neutral;
     /// The user's identity coefficients (FaceResult::identity; standard deviations
     /// of the model's identity modes, each within +-10). Empty: the Tracker

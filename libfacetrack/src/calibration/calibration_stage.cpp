@@ -13,6 +13,21 @@ struct CalibrationFaceState final : pipeline::StageState {
     std::optional<ExpressionResult> last;  ///< this frame's weights before calibration
 };
 
+/// For each of the face model's own expressions, the ARKit shape it drives
+/// (FaceModel::toArkit of it alone), or -1 for those that drive none.
+std::vector<int> arkitOfNative(const FaceModel& model) {
+    std::vector<int> out;
+    std::vector<float> one(model.expressionNames().size(), 0.f);
+    for (std::size_t k = 0; k < one.size(); ++k) {
+        one[k] = 1.f;
+        const auto arkit = model.toArkit(one);
+        const auto driven = std::find_if(arkit.begin(), arkit.end(), [](float w) { return w > 0.f; });
+        out.push_back(driven == arkit.end() ? -1 : static_cast<int>(driven - arkit.begin()));
+        one[k] = 0.f;
+    }
+    return out;
+}
+
 /// The eyeLook shapes of `names`: a captured neutral leaves them alone.
 template <class Names>
 std::vector<bool> eyeLook(const Names& names) {
@@ -25,6 +40,7 @@ class CalibrationStage final : public pipeline::Stage {
 public:
     explicit CalibrationStage(const FaceModel& model)
         : native_count_(model.expressionNames().size()),
+          arkit_of_native_(arkitOfNative(model)),
           eye_look_(eyeLook(arkitNames())),
           native_eye_look_(eyeLook(model.expressionNames())) {}
 
@@ -41,9 +57,8 @@ public:
         if (passthrough_) return pipeline::Outcome::Ok;
         ExpressionResult& e = *face.result.expression;
         for (std::size_t k = 0; k < e.arkit.size(); ++k) e.arkit[k] = calibrated(calibration_.shapes[k], e.arkit[k]);
-        const std::vector<float>& w0 = calibration_.native_neutral;
-        if (w0.size() == e.native.size()) {
-            for (std::size_t k = 0; k < e.native.size(); ++k) e.native[k] = std::clamp((e.native[k] - w0[k]) / (1.f - w0[k]), 0.f, 1.f);
+        if (e.native.size() == native_count_) {
+            for (std::size_t k = 0; k < e.native.size(); ++k) e.native[k] = calibrated(native_[k], e.native[k]);
         }
         return pipeline::Outcome::Ok;
     }
@@ -55,6 +70,15 @@ public:
         }
         calibration_ = calibration;
         passthrough_ = calibration_.shapes == Calibration{}.shapes && calibration_.native_neutral.empty();
+        // A native weight: its own neutral, and the range, gain and dead zone of the ARKit shape it
+        // drives (so that a mesh posed from them moves as the ARKit weights sent do).
+        native_.assign(native_count_, ShapeCalibration{});
+        for (std::size_t k = 0; k < native_count_; ++k) {
+            ShapeCalibration& s = native_[k];
+            if (arkit_of_native_[k] >= 0) s = calibration_.shapes[static_cast<std::size_t>(arkit_of_native_[k])];
+            s.neutral = calibration_.native_neutral.empty() ? 0.f : calibration_.native_neutral[k];
+            if (s.full <= s.neutral) s.full = 1.f;  // one side's neutral above the pair's full: its neutral alone
+        }
     }
 
     void captureNeutral(const pipeline::StageState* state, Calibration& into) const override {
@@ -76,9 +100,11 @@ private:
     // A captured neutral stays this far below the shape's full value.
     static constexpr float kMinRange = 0.01f;
     std::size_t native_count_;
+    std::vector<int> arkit_of_native_;  ///< per native expression, the ARKit shape it drives, or -1
     std::vector<bool> eye_look_, native_eye_look_;
     Calibration calibration_;
-    bool passthrough_ = true;  ///< the calibration leaves every weight as it is
+    std::vector<ShapeCalibration> native_;  ///< how each native weight is reported
+    bool passthrough_ = true;               ///< the calibration leaves every weight as it is
 };
 
 }  // namespace

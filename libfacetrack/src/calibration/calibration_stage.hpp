@@ -3,8 +3,10 @@
 // (facetrack/calibration.hpp) applied to the reported weights, so that their
 // relaxed face reads 0 and their full expression reaches 1:
 //   w' = min(g r', 1),  r' = dead zone d applied to r = clamp((w - w0) / (w1 - w0), 0, 1)
-// for each ARKit weight, and clamp((w - w0) / (1 - w0), 0, 1) for the face
-// model's own weights when a native neutral is given.
+// for each ARKit weight; each of the face model's own weights the same way,
+// with its own neutral and the w1, g and d of the ARKit shape it drives, so
+// that a mesh posed from them (the demo's avatar, OpenSeeFace's points) moves
+// as the ARKit weights do.
 //
 // Reads: expression. Writes: expression (not raw: raw stays as the stages
 // estimated it). It keeps each face's last input, so that a neutral is taken
