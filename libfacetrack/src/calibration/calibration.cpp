@@ -3,6 +3,7 @@
 
 #include "facetrack/calibration.hpp"
 
+#include "calibration/neutral.hpp"
 #include "facetrack/error.hpp"
 
 #include <nlohmann/json.hpp>
@@ -32,8 +33,6 @@ constexpr float kMaxIdentity = 10.f;
 // shape no stage estimates.
 constexpr float kMinRange = 0.1f;
 constexpr double kFullPercentile = 0.9;
-
-bool isEyeLook(std::string_view name) { return name.rfind("eyeLook", 0) == 0; }
 
 /// The double whose shortest decimal text is the shortest text of `f`: JSON
 /// then shows 0.1 rather than 0.100000001, and reads back as the same float.
@@ -230,7 +229,7 @@ Calibration CalibrationCapture::result() const {
     for (const auto& frame : neutral)
         for (std::size_t k = 0; k < mean.size(); ++k) mean[k] += frame.arkit[k];
     for (std::size_t k = 0; k < mean.size(); ++k) {
-        if (isEyeLook(names[k])) continue;
+        if (calibration::keepsItsNeutral(names[k])) continue;
         ShapeCalibration& s = out.shapes[k];
         s.neutral = std::min(static_cast<float>(mean[k] / static_cast<double>(neutral.size())), 1.f - kMinRange);
         s.full = 1.f;
