@@ -165,6 +165,10 @@ TEST(Allocations, NonePerTrackedFrameWithACascade) {
     cascade.neutral.clear();
     cascade.full.clear();
     cascade.reported.clear();
+    cascade.geometry_net.clear();
+    cascade.geometry_reported.clear();
+    cascade.geometry_neutral.clear();
+    cascade.geometry_full.clear();
     cascade.stages.assign(1, {2, test::fixtureBytes("cnn_parity.onnx")});
     cascade.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     const std::string path = test::tempPath("cascade_allocations.ftm");

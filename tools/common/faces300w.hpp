@@ -43,7 +43,6 @@ bool boxMatchesFace(const Box& box, const core::Shape2& points);
 /// Of the matching detections, the one overlapping the points' bounding box most.
 std::optional<Box> matchingBox(const std::vector<Detection>& detections, const core::Shape2& points);
 
-/// The 68-point iBUG index each point goes to in a mirrored image.
-extern const std::array<int, 68> kMirror68;
+using core::kMirror68;
 
 }  // namespace facetrack::tools

@@ -28,7 +28,7 @@ steps=(
   "refine_data     15 min  LBF's points on 300-W, face-profiled copies, the crops as arrays"
   "refine          60 min  the landmark refiner"
   "sides           30 min  the brow and eye refiner per side"
-  "expression      60 min  the expression stage's samples (teacher, warped faces) and net, packed into the CNN file"
+  "expression      65 min  the expression stage's samples (teacher, warped faces), texture and geometry nets, packed into the CNN file"
 )
 
 done_file() { echo "$out/$1.done"; }
@@ -85,8 +85,16 @@ run_step() {
         --clip-copy-every 6 --arkit ../shared/data/arkit --arkit-every 4 --out build/cnn_samples_v2
       "${py[@]}" tools.train.expression.train_stage --samples build/cnn_samples_v2 --out build/cnn/v2 --expressions \
         --teacher ../shared/data/teacher --copies-per-epoch 2 --clips-per-epoch 1.5 --dropout 0.3 --minutes 45
+      # the geometry net reads the landmarks as the retrained pipeline tracks every clip (the trainer reads the splits)
+      mkdir -p build/tracked
+      for clip in ../shared/data/clips/*.mp4; do
+        FACETRACK_MODEL_DIR=$models $bin/facetrack track "$clip" --raw --profile none \
+          --out "build/tracked/$(basename "$clip" .mp4).jsonl" 2>/dev/null
+      done
+      "${py[@]}" tools.train.expression.train_geometry --tracked build/tracked --net build/cnn/v2 --out build/cnn/geometry
       $bin/pack_cnn --base $models/cnn_cascade.ftm --nets build/cnn/v2.onnx --expressions-only --rest-from-validation \
-        --gain-from-validation --mirror-average --min-validation-r 0.1 --corrects-fit --out $models/cnn_cascade.ftm \
+        --gain-from-validation --mirror-average --min-validation-r 0.1 --leave-out cheekSquint_L,cheekSquint_R,noseSneer_L,noseSneer_R \
+        --corrects-fit --geometry build/cnn/geometry --out $models/cnn_cascade.ftm \
         --provenance "tools/train/retrain_all.sh: refiner, sides, expressions" ;;
     *) echo "retrain_all: no step '$name'" >&2; return 2 ;;
   esac

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -18,6 +19,16 @@ constexpr int kLandmarks = 68;
 /// A 68-point shape (iBUG order, pixels), fixed size so that per-frame work never allocates:
 /// what the landmark stages pass each other.
 using Shape68 = Eigen::Matrix<float, 2, kLandmarks>;
+
+/// The 68-point iBUG index each point goes to in a mirrored image.
+inline constexpr std::array<int, kLandmarks> kMirror68 = {
+    16, 15, 14, 13, 12, 11, 10, 9,  8,  7,  6,  5,  4, 3, 2, 1, 0,  // jaw
+    26, 25, 24, 23, 22, 21, 20, 19, 18, 17,                         // brows
+    27, 28, 29, 30, 35, 34, 33, 32, 31,                             // nose
+    45, 44, 43, 42, 47, 46, 39, 38, 37, 36, 41, 40,                 // eyes
+    54, 53, 52, 51, 50, 49, 48, 59, 58, 57, 56, 55,                 // outer lips
+    64, 63, 62, 61, 60, 67, 66, 65,                                 // inner lips
+};
 
 /// The shape as the public API's landmark array, and back.
 Landmarks68 toLandmarks68(const Shape68& shape);

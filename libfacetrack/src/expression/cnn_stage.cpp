@@ -1,6 +1,7 @@
 #include "expression/cnn_stage.hpp"
 
 #include "core/shape2d.hpp"
+#include "expression/geometry_net.hpp"
 #include "expression/landmark_net.hpp"
 #include "expression/update_net.hpp"
 #include "facetrack/error.hpp"
@@ -34,6 +35,7 @@ public:
             nets_.emplace_back(d.stages[i].onnx, d.patch_size, 6 + static_cast<int>(d.expressions.size()),
                                "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1), mirror_ ? 2 : 1);
         }
+        if (!d.geometry_net.empty()) geometry_net_.emplace(d.geometry_net, d.expressions);
         if (cascade_->hasLandmarkNet()) {
             landmark_basis_ = landmarkBasis(*face_, layout_.anchors.expressions);
             landmark_net_.emplace(d.landmark_net, d.patch_size, kLandmarkOutputs,
@@ -54,6 +56,7 @@ public:
                                 : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
                     std::to_string(layout_.anchors.expressions.size()) + " expressions" + (mirror_ ? ", mirror-averaged" : "") +
+                    (geometry_net_ ? ", " + std::to_string(geometryCount()) + " read from the landmarks' geometry" : "") +
                     (landmark_net_ ? ", landmark net" : "") + "; nets on the " + nets_.front().engineName() + " (" +
                     cascade_->sourcePath() + ")"};
     }
@@ -68,6 +71,7 @@ public:
     pipeline::Contract contract() const override {
         using pipeline::Field;
         pipeline::Contract c{Field::Pose | Field::Expression | Field::Identity, Field::Expression};
+        if (geometry_net_) c.reads = c.reads | Field::Landmarks;
         if (!cascade_->expressionsOnly()) c.writes = c.writes | Field::Pose;
         if (landmark_net_) c.writes = c.writes | Field::Landmarks;
         for (const Reported& r : reported_) c.expressions.push_back(layout_.anchors.expressions[static_cast<std::size_t>(r.position)]);
@@ -82,7 +86,7 @@ public:
         for (std::size_t k = 0; k < layout_.anchors.expressions.size(); ++k) {
             const int e = layout_.anchors.expressions[k];
             const bool fitted = std::find(upstream.expressions.begin(), upstream.expressions.end(), e) != upstream.expressions.end();
-            const bool read = d.reported.empty() || d.reported[k];
+            const bool read = d.reported.empty() || d.reported[k] || (geometry_net_ && d.geometry_reported[k]);
             if (!d.expressions_only || (read && (!fitted || d.corrects_fit)))
                 reported_.push_back({static_cast<int>(k), !fitted || d.corrects_fit});
         }
@@ -121,12 +125,33 @@ public:
             }
             native[static_cast<std::size_t>(layout_.anchors.expressions[static_cast<std::size_t>(k)])] = w;
         }
+        if (geometry_net_ && r.landmarks) readGeometry(*r.landmarks, r.pose->euler_deg, native);
         r.expression->arkit = face_->toArkit(native);
         if (landmark_net_) moveLandmarks(frame, face, s);
         return Outcome::Ok;
     }
 
 private:
+    int geometryCount() const {
+        const auto& g = model::dataOf(*cascade_).geometry_reported;
+        return static_cast<int>(
+            std::count_if(reported_.begin(), reported_.end(), [&](const Reported& r) { return g[static_cast<std::size_t>(r.position)]; }));
+    }
+
+    /// The geometry net's readings (geometry_net.hpp) in place of the texture's, for the expressions
+    /// the file reads from the geometry, each between its own neutral and full readings.
+    void readGeometry(const Landmarks68& landmarks, const Vec3& eulerDeg, std::vector<float>& native) {
+        const nn::CnnModelData& d = model::dataOf(*cascade_);
+        const Eigen::VectorXf& g = geometry_net_->predict(core::fromLandmarks68(landmarks), eulerDeg.x, eulerDeg.y);
+        if (!g.allFinite()) return;
+        for (const Reported& r : reported_) {
+            const auto k = static_cast<std::size_t>(r.position);
+            if (!d.geometry_reported[k]) continue;
+            const float w = std::clamp((g[r.position] - d.geometry_neutral[k]) / (d.geometry_full[k] - d.geometry_neutral[k]), 0.f, 1.f);
+            native[static_cast<std::size_t>(layout_.anchors.expressions[k])] = w;
+        }
+    }
+
     /// The landmark net's landmarks (landmark_net.hpp) at the refined parameters, in place of the
     /// landmark stage's; kept when a value is not finite.
     void moveLandmarks(const pipeline::FrameInput& frame, pipeline::FaceTrack& face, CnnFaceState& s) {
@@ -150,6 +175,7 @@ private:
     fit::FitBasis landmark_basis_;
     std::optional<nn::PatchNet> landmark_net_;
     std::optional<UpdateMirror> mirror_;
+    std::optional<GeometryNet> geometry_net_;
     struct Reported {
         int position;  ///< in the layout's expressions
         /// Read between its neutral and full readings: a reading, or a correction of the fit's

@@ -6,6 +6,7 @@
 #include "nn/cnn_model_data.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace facetrack {
 
@@ -13,6 +14,36 @@ namespace nn {
 
 namespace {
 constexpr int kMaxStages = 8, kMaxRounds = 8;
+
+void validateGeometry(const CnnModelData& m, const std::string& what) {
+    if (m.geometry_net.empty()) {
+        if (!m.geometry_reported.empty() || !m.geometry_neutral.empty() || !m.geometry_full.empty())
+            throw Error(what + ": corrupt: geometry readings without the geometry net");
+        return;
+    }
+    if (m.stages.empty()) throw Error(what + ": corrupt: a geometry net without cascade stages");
+    int inputs = kGeometryFeatures;
+    for (const DenseLayer& l : m.geometry_net) {
+        if (l.cols != inputs || l.rows < 1 || l.rows > 4096 || l.weight.size() != static_cast<std::size_t>(l.rows) * l.cols ||
+            l.bias.size() != static_cast<std::size_t>(l.rows))
+            throw Error(what + ": corrupt: a geometry net layer");
+        for (const float v : l.weight) {
+            if (!std::isfinite(v)) throw Error(what + ": corrupt: a geometry net weight");
+        }
+        for (const float v : l.bias) {
+            if (!std::isfinite(v)) throw Error(what + ": corrupt: a geometry net weight");
+        }
+        inputs = l.rows;
+    }
+    const std::size_t n = m.expressions.size();
+    if (static_cast<std::size_t>(inputs) != n || m.geometry_reported.size() != n || m.geometry_neutral.size() != n ||
+        m.geometry_full.size() != n)
+        throw Error(what + ": corrupt: the geometry net's outputs");
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!(m.geometry_neutral[k] >= 0.f && m.geometry_neutral[k] < m.geometry_full[k] && m.geometry_full[k] <= 1.f))
+            throw Error(what + ": corrupt: a geometry reading's neutral or full value");
+    }
+}
 
 void validate(const CnnModelData& m, const std::string& what) {
     if (m.patch_size < 16 || m.patch_size > 256) throw Error(what + ": corrupt: patch size");
@@ -59,6 +90,7 @@ void validate(const CnnModelData& m, const std::string& what) {
     for (const auto& s : m.stages) {
         if (s.rounds < 1 || s.rounds > kMaxRounds || s.onnx.empty()) throw Error(what + ": corrupt: a stage");
     }
+    validateGeometry(m, what);
 }
 }  // namespace
 
@@ -104,6 +136,20 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     w.put<std::uint8_t>(m.corrects_fit ? 1 : 0);
     w.put<std::uint32_t>(static_cast<std::uint32_t>(m.full.size()));
     for (const float v : m.full) w.put<float>(v);
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(m.geometry_net.size()));
+    for (const DenseLayer& l : m.geometry_net) {
+        w.put<std::int32_t>(l.rows);
+        w.put<std::int32_t>(l.cols);
+        for (const float v : l.weight) w.put<float>(v);
+        for (const float v : l.bias) w.put<float>(v);
+    }
+    if (!m.geometry_net.empty()) {
+        for (std::size_t k = 0; k < m.expressions.size(); ++k) {
+            w.put<std::uint8_t>(m.geometry_reported[k] ? 1 : 0);
+            w.put<float>(m.geometry_neutral[k]);
+            w.put<float>(m.geometry_full[k]);
+        }
+    }
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -174,6 +220,30 @@ CnnModelData readCnnModel(const std::string& path) {
         const auto full = r.get<std::uint32_t>();
         if (full > names) r.fail("full-expression reading count");
         for (std::uint32_t i = 0; i < full; ++i) m.full.push_back(r.get<float>());
+    }
+    if (version >= 9) {
+        const auto layers = r.get<std::uint32_t>();
+        if (layers > 8) r.fail("geometry net layer count");
+        for (std::uint32_t i = 0; i < layers; ++i) {
+            DenseLayer l;
+            l.rows = r.get<std::int32_t>();
+            l.cols = r.get<std::int32_t>();
+            if (l.rows < 1 || l.rows > 4096 || l.cols < 1 || l.cols > 4096) r.fail("a geometry net layer's size");
+            l.weight.resize(static_cast<std::size_t>(l.rows) * static_cast<std::size_t>(l.cols));
+            for (float& v : l.weight) v = r.get<float>();
+            l.bias.resize(static_cast<std::size_t>(l.rows));
+            for (float& v : l.bias) v = r.get<float>();
+            m.geometry_net.push_back(std::move(l));
+        }
+        if (layers > 0) {
+            for (std::uint32_t i = 0; i < names; ++i) {
+                const auto flag = r.get<std::uint8_t>();
+                if (flag > 1) r.fail("a geometry reported flag");
+                m.geometry_reported.push_back(flag == 1);
+                m.geometry_neutral.push_back(r.get<float>());
+                m.geometry_full.push_back(r.get<float>());
+            }
+        }
     }
     r.expectEnd();
     validate(m, what);

@@ -12,6 +12,16 @@ struct CnnStageData {
     std::string onnx;  ///< the net, an ONNX file's bytes (opset <= 13; update_net.hpp says what it computes)
 };
 
+/// The geometry net's inputs (expression/geometry_net.hpp): the 68 normalised points' x and y, then
+/// sin(pitch) and sin(yaw).
+constexpr int kGeometryFeatures = 2 * 68 + 2;
+
+/// A dense layer, y = W x + b, W `rows` x `cols` row-major.
+struct DenseLayer {
+    int rows = 0, cols = 0;
+    std::vector<float> weight, bias;
+};
+
 struct CnnModelData {
     int patch_size = 64;
     /// The nets' expression outputs, native face model names, in output order.
@@ -46,6 +56,14 @@ struct CnnModelData {
     /// refine): the face and its mirror image read alike. Their nets then need each sided
     /// expression's partner among `expressions`. Format version 7.
     bool mirror_averaged = false;
+    /// The geometry net (expression/geometry_net.hpp; format version 9): dense layers, ReLU between
+    /// them and a sigmoid after the last, from the landmarks' geometry to `expressions`; empty: none.
+    std::vector<DenseLayer> geometry_net;
+    /// Per expression (empty: none), whether the stage reports the geometry net's reading in place
+    /// of the texture nets': pack_cnn keeps those whose geometry reading agreed better with the
+    /// labels on the validation people. Each is read between its own neutral and full readings below.
+    std::vector<bool> geometry_reported;
+    std::vector<float> geometry_neutral, geometry_full;
     /// The final net, the 68 landmarks' displacements (landmark_net.hpp): ONNX bytes, or empty for none.
     std::string landmark_net;
     std::string provenance;
@@ -67,7 +85,7 @@ struct CnnModelData {
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 8;
+constexpr std::uint32_t kCnnModelVersion = 9;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

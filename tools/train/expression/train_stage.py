@@ -71,8 +71,14 @@ def mirror_name(name):
     return name
 
 
+# Face-model expressions with a side whose ARKit shape has none (model/arkit_mapping.cpp averages the two).
+UNSIDED_IN_ARKIT = ("browInnerUp", "cheekPuff")
+
+
 def arkit_name(native):
-    """The ARKit name of a face-model expression ("browDown_L" -> "browDownLeft")."""
+    """The ARKit name of a face-model expression ("browDown_L" -> "browDownLeft", "browInnerUp_L" -> "browInnerUp")."""
+    if native[:-2] in UNSIDED_IN_ARKIT and native[-2:] in ("_L", "_R"):
+        return native[:-2]
     for suffix, side in (("_L", "Left"), ("_R", "Right")):
         if native.endswith(suffix):
             return native[:-len(suffix)] + side
@@ -253,6 +259,28 @@ def rest_levels(pred, update, labels, names):
     return out
 
 
+def teacher_readings(net, validation, scale, mirror, names):
+    """Per validation set, (estimate, label, mask) of the expressions as the stage reads them
+    (start + update, mirror-averaged), and the rest levels on the 300-W crops."""
+    readings, rest = {}, None
+    for name, (x_val, y_val, labels_val, m_val) in validation.items():
+        pred = predict(net, x_val, scale, mirror)
+        readings[name] = ((labels_val - y_val[:, 6:] + pred[:, 6:]).clamp(0, 1), labels_val, m_val[:, 6:])
+        if name == "faces300w":
+            rest = rest_levels(pred, y_val, labels_val, names)
+    return readings, rest
+
+
+def write_teacher_figures(out, readings, rest, names):
+    """OUT.validation_{r,rest,gain}.txt from teacher_readings: r and gain on the validation people's
+    frames and warped copies, the rest levels on the 300-W validation crops."""
+    people = [readings[n] for n in ("clips", "clips_moved") if n in readings]
+    estimate, label, mask = (torch.cat([r[i] for r in people]) for i in range(3))
+    write_agreement(out, masked_agreement(estimate, label, mask, names))
+    write_rest_levels(out, rest)
+    write_gains(out, gains(estimate, label, mask, rest, names))
+
+
 def write_rest_levels(out, levels):
     """OUT.validation_rest.txt: per expression, its rest level on the 300-W validation crops
     (pack_cnn --rest-from-validation makes it the shape's neutral)."""
@@ -261,9 +289,16 @@ def write_rest_levels(out, levels):
             f.write(f"{n} {v:.4f}\n")
 
 
-def predict(net, x, scale):
+def predict(net, x, scale, mirror=None):
+    """The net's outputs for standardised patches `x`; with `mirror` (mirror_permutation's order and
+    sign), averaged with its outputs for the mirror images, as the expression stage runs it."""
     with torch.no_grad():
-        return torch.cat([net(x[i:i + 512]) for i in range(0, len(x), 512)]) * scale
+        out = torch.cat([net(x[i:i + 512]) for i in range(0, len(x), 512)]) * scale
+        if mirror is None:
+            return out
+        order, sign = mirror
+        flipped = torch.cat([net(x[i:i + 512].flip(3)) for i in range(0, len(x), 512)]) * scale
+        return (out + flipped[:, order] * sign) / 2
 
 
 def load_landmarks(samples_dir, name, splits):
@@ -330,13 +365,16 @@ def write_columns(out, columns):
 
 
 class Stage(torch.nn.Module):
-    """64x64 grey -> (6 + E): four stride-2 conv blocks (BatchNorm, ReLU), two linear layers."""
+    """64x64 grey -> (6 + E): 3x3 conv blocks (BatchNorm, ReLU) of the given widths and strides, whose
+    strides bring the patch to 4x4, then two linear layers."""
 
-    def __init__(self, outputs, widths=(16, 32, 64, 96), hidden=256, dropout=0.0):
+    def __init__(self, outputs, widths=(16, 32, 64, 96), hidden=256, dropout=0.0, strides=(2, 2, 2, 2)):
         super().__init__()
+        if len(strides) != len(widths) or math.prod(strides) != 16:
+            raise ValueError(f"strides {strides}: one per block, bringing 64 px to 4")
         layers, channels = [], 1
-        for width in widths:
-            layers += [torch.nn.Conv2d(channels, width, 3, stride=2, padding=1, bias=False), torch.nn.BatchNorm2d(width),
+        for width, stride in zip(widths, strides):
+            layers += [torch.nn.Conv2d(channels, width, 3, stride=stride, padding=1, bias=False), torch.nn.BatchNorm2d(width),
                        torch.nn.ReLU()]
             channels = width
         self.features = torch.nn.Sequential(*layers)
@@ -364,7 +402,10 @@ def main():
                         "loss and choose the best epoch; give samples whose starts are the fit's (make_cnn_samples "
                         "--starts-from fit), as at run time: starts near the label would teach corrections, not readings")
     p.add_argument("--dropout", type=float, default=0.0, help="dropout before the last layer (not in the export)")
-    p.add_argument("--widths", default="16,32,64,96", help="the four conv blocks' channels, comma-separated")
+    p.add_argument("--widths", default="16,32,64,96", help="the conv blocks' channels, comma-separated")
+    p.add_argument("--strides", default="2,2,2,2",
+                   help="the conv blocks' strides, comma-separated (their product 16); a first block of stride 1 reads the "
+                        "patch at full resolution, where a lip corner moves by a pixel or two")
     p.add_argument("--hidden", type=int, default=256, help="the hidden linear layer's width")
     p.add_argument("--hold-out-clips", default="", help="clips also left out of training, comma-separated parts of their names")
     p.add_argument("--clips-per-epoch", type=float, default=1,
@@ -426,22 +467,28 @@ def main():
           f"{ {k: len(v[0]) for k, v in validation.items()} }; outputs {y_train.shape[1]}", flush=True)
 
     widths = tuple(int(w) for w in a.widths.split(","))
-    net = Stage(y_train.shape[1], widths, a.hidden, a.dropout)
+    strides = tuple(int(s) for s in a.strides.split(","))
+    net = Stage(y_train.shape[1], widths, a.hidden, a.dropout, strides)
     opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
     epoch, started, best = 0, time.time(), float("inf")
     if a.export_only:
         state = torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))
         # the layers it was trained with
-        net = Stage(y_train.shape[1], state.get("widths", widths), state.get("hidden", a.hidden), state.get("dropout", a.dropout))
+        net = Stage(y_train.shape[1], state.get("widths", widths), state.get("hidden", a.hidden), state.get("dropout", a.dropout),
+                    state.get("strides", (2,) * len(state.get("widths", widths))))
         net.load_state_dict(state["net"])
         # The spread the net was trained with (older checkpoints lack it: then the given samples' own,
         # which must be the training run's --samples).
         export(net, a.out + ".onnx", state.get("scale", scale), output_name)
         write_columns(a.out, columns)
-        if a.expressions and "faces300w" in validation:
-            net.eval()
+        net.eval()
+        if TEACHER is not None:
+            write_teacher_figures(a.out, *teacher_readings(net, validation, state.get("scale", scale), (flip_order, flip_sign),
+                                                           columns[6:]), columns[6:])
+        elif a.expressions and "faces300w" in validation:
             x_val, y_val, labels_val, _ = validation["faces300w"]
-            write_rest_levels(a.out, rest_levels(predict(net, x_val, state.get("scale", scale)), y_val, labels_val, columns[6:]))
+            write_rest_levels(a.out, rest_levels(predict(net, x_val, state.get("scale", scale), (flip_order, flip_sign)),
+                                                 y_val, labels_val, columns[6:]))
         print(f"wrote {a.out}.onnx", flush=True)
         return
     if a.resume and os.path.exists(a.out + ".pt"):
@@ -486,7 +533,7 @@ def main():
         with torch.no_grad():
             readings = {}  # teacher mode: per validation set, (estimate, label, mask) of the expressions
             for name, (x_val, y_val, labels_val, m_val) in validation.items():
-                pred = predict(net, x_val, scale)
+                pred = predict(net, x_val, scale, None if a.landmarks else (flip_order, flip_sign))
                 if a.landmarks:  # mean point distance, patch pixels
                     before = y_val.view(len(y_val), -1, 2).norm(dim=2).mean().item()
                     after = (pred - y_val).view(len(y_val), -1, 2).norm(dim=2).mean().item()
@@ -527,17 +574,15 @@ def main():
                 f"{n} {agreement[n]:.2f}" for n in ("jawOpen", "mouthSmile_L", "mouthPucker", "browDown_L", "browInnerUp_L", "mouthFrown_L",
                                                     "mouthPress_L", "mouthLeft", "cheekPuff_L", "noseSneer_L"))
             if score < best:
-                write_agreement(a.out, agreement)
-                write_rest_levels(a.out, rest)
-                write_gains(a.out, gains(estimate, label, mask, rest, columns[6:]))
+                write_teacher_figures(a.out, readings, rest, columns[6:])
         line += f" {time.time() - started:.0f} s"
         print(line, flush=True); log.write(line + "\n"); log.flush()
         torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "epoch": epoch, "best": best, "scale": scale,
-                    "dropout": a.dropout, "widths": widths, "hidden": a.hidden}, a.out + ".pt")
+                    "dropout": a.dropout, "widths": widths, "strides": strides, "hidden": a.hidden}, a.out + ".pt")
         if score < best:  # the net that exports: the best on the validation crops (the test crops choose nothing)
             best = score
             torch.save({"net": net.state_dict(), "epoch": epoch, "scale": scale, "dropout": a.dropout, "widths": widths,
-                        "hidden": a.hidden}, a.out + ".best.pt")
+                        "strides": strides, "hidden": a.hidden}, a.out + ".best.pt")
     if os.path.exists(a.out + ".best.pt"):
         net.load_state_dict(torch.load(a.out + ".best.pt")["net"])
     net.eval()

@@ -7,6 +7,7 @@
 //                                            [--min-validation-r R [--leave-out NAME,...]]]
 //                        [--mirror-average] [--corrects-fit]
 //                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
+//                        [--geometry build/cnn/geometry]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
 //
 // --base: start from that file's nets (the options given replace theirs). --sides: the brow and eye
@@ -36,6 +37,11 @@
 // (cnn/update_net.hpp, refine), so that a face and its mirror image read alike; twice the nets' time.
 // --corrects-fit (with --expressions-only): the stage also corrects the shapes the fit estimates
 // (cnn_model_data.hpp).
+// --geometry PREFIX (with --nets and --min-validation-r): the geometry net of
+// tools/train/expression/train_geometry.py (PREFIX.geometry.txt; expression/geometry_net.hpp). A
+// shape is read from it where its r on the validation people (PREFIX.validation_geometry.txt, a
+// pair's mean) is at least R and beats the texture net's by kGeometryMargin, between its rest level
+// there and 1.
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
@@ -48,6 +54,7 @@
 #include "app/tool_main.hpp"
 #include "core/binary_io.hpp"
 #include "data/dense/label_table.hpp"
+#include "expression/geometry_net.hpp"
 #include "expression/landmark_net.hpp"
 #include "expression/update_net.hpp"
 #include "facetrack/face_model.hpp"
@@ -55,6 +62,7 @@
 #include "nn/cnn_model_data.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -112,6 +120,43 @@ std::vector<double> pairAveraged(const std::string& onnxPath, const std::string&
     return out;
 }
 
+/// How much better than the texture's a shape's geometry reading must agree with the validation
+/// people's labels to replace it: r over five people's ~500 frames, consecutive frames alike, moves
+/// by about this much from one set of people to another.
+constexpr double kGeometryMargin = 0.1;
+
+/// The geometry net of train_geometry.py's PREFIX.geometry.txt, checked against the trainer's own
+/// reading of one validation frame written after it.
+std::vector<nn::DenseLayer> readGeometryNet(const std::string& prefix, const std::vector<std::string>& expressions) {
+    const std::string path = prefix + ".geometry.txt";
+    std::stringstream in(readBytes(path));
+    std::string header, word;
+    std::getline(in, header);
+    if (header != "facetrack geometry net 1") throw Error(path + ": not a geometry net of train_geometry.py");
+    int count = 0;
+    in >> word >> count;
+    if (word != "layers" || count < 1 || count > 8) throw Error(path + ": expected 'layers N'");
+    std::vector<nn::DenseLayer> layers(static_cast<std::size_t>(count));
+    for (nn::DenseLayer& l : layers) {
+        in >> l.rows >> l.cols;
+        if (!in || l.rows < 1 || l.cols < 1 || l.rows > 4096 || l.cols > 4096) throw Error(path + ": a layer's size");
+        l.weight.resize(static_cast<std::size_t>(l.rows) * static_cast<std::size_t>(l.cols));
+        l.bias.resize(static_cast<std::size_t>(l.rows));
+        for (float& v : l.weight) in >> v;
+        for (float& v : l.bias) in >> v;
+    }
+    expression::GeometryFeatures f;
+    for (float& v : f) in >> v;
+    Eigen::VectorXf expected(layers.back().rows);
+    for (float& v : expected) in >> v;
+    if (!in) throw Error(path + ": truncated");
+    if (layers.back().rows != static_cast<int>(expressions.size())) throw Error(path + ": its outputs are not the nets' expressions");
+    expression::GeometryNet net(layers, expressions);
+    const float error = (net.forward(f) - expected).cwiseAbs().maxCoeff();
+    if (!(error < 1e-4f)) throw Error(path + ": the net reads its check frame " + std::to_string(error) + " off the trainer's reading");
+    return layers;
+}
+
 /// Per name, the median of its column over the table's training rows.
 std::vector<float> trainingMedians(const std::string& path, const std::vector<std::string>& names) {
     const dense::LabelTable table = dense::readLabelTable(path);
@@ -133,7 +178,7 @@ int run(int argc, char** argv) {
     const tools::Args args(
         std::vector<std::string>(argv + 1, argv + argc),
         {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r", "--leave-out",
-         "--refiner", "--sides", "--base"},
+         "--refiner", "--sides", "--base", "--geometry"},
         {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation", "--gain-from-validation"});
     if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
         std::puts(
@@ -141,7 +186,7 @@ int run(int argc, char** argv) {
             "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R [--leave-out N,...]]\n"
             "                [--refiner R.onnx]\n"
             "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation\n"
-            "                [--gain-from-validation]]");
+            "                [--gain-from-validation]] [--geometry PREFIX]");
         return args.has("--help") ? 0 : 2;
     }
     const auto nets = tools::splitList(args.get("--nets", ""));
@@ -225,6 +270,40 @@ int run(int argc, char** argv) {
         std::printf("reported:");
         for (std::size_t k = 0; k < model.reported.size(); ++k) {
             if (model.reported[k]) std::printf(" %s", model.expressions[k].c_str());
+        }
+        std::printf("\n");
+    }
+    if (args.has("--geometry")) {
+        if (!args.has("--min-validation-r") || nets.empty()) throw Error("--geometry goes with --nets and --min-validation-r");
+        const std::string prefix = args.get("--geometry");
+        model.geometry_net = readGeometryNet(prefix, model.expressions);
+        const auto texture_r = pairAveraged(nets.back(), ".validation_r.txt", model.expressions);
+        std::map<std::string, std::array<double, 2>> figures;  // r, rest level
+        std::stringstream lines(readBytes(prefix + ".validation_geometry.txt"));
+        std::string name, r, rest;
+        while (lines >> name >> r >> rest) figures[name] = {std::stod(r), std::stod(rest)};
+        const auto pair = [&](const std::string& n, int i) {
+            const auto value = [&](const std::string& m) {
+                const auto it = figures.find(m);
+                if (it == figures.end()) throw Error(prefix + ".validation_geometry.txt has no " + m);
+                return std::isfinite(it->second[static_cast<std::size_t>(i)]) ? it->second[static_cast<std::size_t>(i)] : 0.0;
+            };
+            const std::string partner = fit::mirrorName(n);
+            return 0.5 * (value(n) + value(partner.empty() ? n : partner));
+        };
+        const double minimum = args.number("--min-validation-r", 0.5);
+        const auto leftOut = tools::splitList(args.get("--leave-out", ""));
+        std::printf("read from the geometry:");
+        for (std::size_t k = 0; k < model.expressions.size(); ++k) {
+            const std::string& n = model.expressions[k];
+            const double geometry_r = pair(n, 0);
+            const bool kept = geometry_r >= std::max(minimum, texture_r[k] + kGeometryMargin) &&
+                              std::find(leftOut.begin(), leftOut.end(), n) == leftOut.end();
+            const float neutral = std::clamp(static_cast<float>(pair(n, 1)), 0.f, 0.9f);
+            model.geometry_reported.push_back(kept);
+            model.geometry_neutral.push_back(neutral);
+            model.geometry_full.push_back(1.f);  // no gain: train_geometry.py says why
+            if (kept) std::printf(" %s (r %.2f against %.2f)", n.c_str(), geometry_r, texture_r[k]);
         }
         std::printf("\n");
     }

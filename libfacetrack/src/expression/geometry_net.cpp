@@ -1,0 +1,79 @@
+#include "expression/geometry_net.hpp"
+
+#include "expression/update_net.hpp"
+
+#include <cmath>
+
+namespace facetrack::expression {
+
+namespace {
+
+GeometryFeatures featuresOf(const core::Shape68& points, double pitchDeg, double yawDeg) {
+    const Eigen::Vector2f centre = points.rowwise().mean();
+    const Eigen::Vector2f eyeLine = points.middleCols<6>(42).rowwise().mean() - points.middleCols<6>(36).rowwise().mean();
+    const float theta = std::atan2(eyeLine.y(), eyeLine.x());
+    Eigen::Matrix2f unroll;
+    unroll << std::cos(theta), std::sin(theta), -std::sin(theta), std::cos(theta);  // R(-theta)
+    const core::Shape68 q = unroll * (points.colwise() - centre);
+    const float rms = std::sqrt(q.squaredNorm() / static_cast<float>(core::kLandmarks));
+    GeometryFeatures f;
+    f.head<2 * core::kLandmarks>() = Eigen::Map<const Eigen::Matrix<float, 2 * core::kLandmarks, 1>>(q.data()) / rms;
+    f[2 * core::kLandmarks] = static_cast<float>(std::sin(pitchDeg * M_PI / 180.0));
+    f[2 * core::kLandmarks + 1] = static_cast<float>(std::sin(yawDeg * M_PI / 180.0));
+    return f;
+}
+
+}  // namespace
+
+GeometryFeatures geometryFeatures(const core::Shape68& points, double pitchDeg, double yawDeg) {
+    return featuresOf(points, pitchDeg, yawDeg);
+}
+
+GeometryFeatures mirroredGeometryFeatures(const core::Shape68& points, double pitchDeg, double yawDeg) {
+    core::Shape68 mirrored;
+    for (int i = 0; i < core::kLandmarks; ++i) {
+        const int from = core::kMirror68[static_cast<std::size_t>(i)];
+        mirrored.col(i) << -points(0, from), points(1, from);
+    }
+    return featuresOf(mirrored, pitchDeg, -yawDeg);
+}
+
+GeometryNet::GeometryNet(std::vector<nn::DenseLayer> layers, const std::vector<std::string>& expressions) {
+    for (const nn::DenseLayer& l : layers) {
+        weights_.push_back(Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(l.weight.data(), l.rows, l.cols));
+        biases_.push_back(Eigen::Map<const Eigen::VectorXf>(l.bias.data(), l.rows));
+        activations_.emplace_back(l.rows);
+    }
+    for (const int i : updateMirror(expressions).order) {
+        if (i >= 6) mirror_.push_back(i - 6);  // the update's first six values are the pose's
+    }
+    direct_.resize(static_cast<Eigen::Index>(mirror_.size()));
+    averaged_.resize(direct_.size());
+}
+
+const Eigen::VectorXf& GeometryNet::forward(const GeometryFeatures& f) {
+    for (std::size_t i = 0; i < weights_.size(); ++i) {
+        Eigen::VectorXf& a = activations_[i];
+        if (i == 0) {
+            a.noalias() = weights_[i] * f;
+        } else {
+            a.noalias() = weights_[i] * activations_[i - 1];
+        }
+        a += biases_[i];
+        if (i + 1 < weights_.size()) {
+            a = a.cwiseMax(0.f);
+        } else {
+            a = (1.f + (-a.array()).exp()).inverse().matrix();
+        }
+    }
+    return activations_.back();
+}
+
+const Eigen::VectorXf& GeometryNet::predict(const core::Shape68& points, double pitchDeg, double yawDeg) {
+    direct_ = forward(geometryFeatures(points, pitchDeg, yawDeg));
+    const Eigen::VectorXf& mirrored = forward(mirroredGeometryFeatures(points, pitchDeg, yawDeg));
+    for (Eigen::Index k = 0; k < direct_.size(); ++k) averaged_[k] = 0.5f * (direct_[k] + mirrored[mirror_[static_cast<std::size_t>(k)]]);
+    return averaged_;
+}
+
+}  // namespace facetrack::expression

@@ -1,0 +1,215 @@
+#!/usr/bin/python3
+"""Trains the expression stage's geometry net (docs/cnn.md): from the 68 landmarks as the pipeline
+tracks them and the head's pitch and yaw, the face model's expressions as MediaPipe Face
+Landmarker's blendshapes read them (../shared/data/teacher: another model's predictions, not ground
+truth; class Teacher of train_stage.py, each shape above its rest level).
+
+  /usr/bin/python3 -m tools.train.expression.train_geometry --tracked build/tracked --net build/cnn/v2 \\
+        [--out build/cnn/geometry] [--epochs 60]
+
+--tracked: a folder of `facetrack track CLIP --raw --profile none --out DIR/<clip name>.jsonl`, one
+per clip of ../shared/data/clips. The training people's clips train it (each frame and its mirror
+image), the validation people's (data/clip_splits.csv) choose the epoch; the held-out people's are
+never read. --net: the texture net it is packed beside (NET.columns.txt: the expressions, in order).
+
+Writes OUT.geometry.txt (the net, input standardisation folded into its first layer: pack_cnn
+--geometry reads it) and OUT.validation_geometry.txt (per expression: Pearson r and the rest level
+on the validation people, read mirror-averaged as the stage reads them).
+
+The features (expression/geometry_net.hpp computes the same): the 68 points centred on their mean,
+rotated so that the line between the eyes' centres (means of points 36-41 and 42-47) is level,
+scaled to unit root-mean-square distance from the centre, as x0, y0, x1, ...; then sin(pitch) and
+sin(yaw) of the fit's head pose.
+"""
+import argparse, csv, json, os
+
+import numpy as np
+import torch
+
+from tools.train import nets
+from tools.train.expression.train_stage import REST_QUANTILE, Teacher, mirror_name
+
+HIDDEN = 256
+
+
+def read_splits(path="data/clip_splits.csv"):
+    with open(path) as f:
+        return {r["clip"]: r["split"] for r in csv.DictReader(line for line in f if not line.startswith("#"))}
+
+
+def landmark_mirror():
+    """Point i of a face's mirror image is point MIRROR[i] of the face (300-W's 68-point scheme)."""
+    jaw = list(range(16, -1, -1))
+    brows = list(range(26, 16, -1))
+    nose = [27, 28, 29, 30, 35, 34, 33, 32, 31]
+    eyes = [45, 44, 43, 42, 47, 46, 39, 38, 37, 36, 41, 40]
+    mouth = [54, 53, 52, 51, 50, 49, 48, 59, 58, 57, 56, 55, 64, 63, 62, 61, 60, 67, 66, 65]
+    return jaw + brows + nose + eyes + mouth
+
+
+MIRROR = landmark_mirror()
+
+
+def features(points, pitch_deg, yaw_deg):
+    """points (N, 68, 2) pixels, pitch and yaw (N,) degrees -> (N, 138)."""
+    c = points - points.mean(1, keepdims=True)
+    d = points[:, 42:48].mean(1) - points[:, 36:42].mean(1)
+    angle = np.arctan2(d[:, 1], d[:, 0])
+    cos, sin = np.cos(-angle)[:, None], np.sin(-angle)[:, None]
+    x = cos * c[:, :, 0] - sin * c[:, :, 1]
+    y = sin * c[:, :, 0] + cos * c[:, :, 1]
+    scale = np.sqrt((x ** 2 + y ** 2).mean(1, keepdims=True))
+    flat = np.stack([x / scale, y / scale], 2).reshape(len(points), -1)
+    return np.concatenate([flat, np.sin(np.radians(pitch_deg))[:, None], np.sin(np.radians(yaw_deg))[:, None]], 1).astype(np.float32)
+
+
+def mirrored(points, pitch_deg, yaw_deg):
+    """The mirror image's points and pose: x negated, points renumbered, yaw negated."""
+    flipped = points[:, MIRROR].copy()
+    flipped[:, :, 0] *= -1
+    return flipped, pitch_deg, -yaw_deg
+
+
+def load_clips(folder, splits, which, teacher, names):
+    """Features, targets (NaN: no label) and clip names of the tracked frames of the clips in split `which`."""
+    X, Y = [], []
+    for file in sorted(os.listdir(folder)):
+        clip = file[:-len(".jsonl")] + ".mp4"
+        if not file.endswith(".jsonl") or splits.get(clip, "train") != which:
+            continue
+        points, pitch, yaw, targets = [], [], [], []
+        with open(os.path.join(folder, file)) as f:
+            for line in f:
+                r = json.loads(line)
+                raw = r.get("raw")
+                if not r["tracked"] or not raw or raw.get("landmarks") is None or raw.get("pose") is None:
+                    continue
+                t = teacher.targets(f"{clip}#{r['frame']}", names)
+                if t is None:
+                    continue
+                points.append(raw["landmarks"]); pitch.append(raw["pose"]["euler_deg"][0]); yaw.append(raw["pose"]["euler_deg"][1])
+                targets.append(t)
+        if points:
+            X.append((np.array(points, np.float32), np.array(pitch, np.float32), np.array(yaw, np.float32)))
+            Y.append(np.array(targets, np.float32))
+    return X, Y
+
+
+def expression_mirror(names):
+    return [names.index(mirror_name(n)) for n in names]
+
+
+class GeometryNet(torch.nn.Module):
+    def __init__(self, inputs, outputs, mean, std):
+        super().__init__()
+        self.register_buffer("mean", mean)
+        self.register_buffer("std", std)
+        self.body = torch.nn.Sequential(torch.nn.Linear(inputs, HIDDEN), torch.nn.ReLU(), torch.nn.Dropout(0.2),
+                                        torch.nn.Linear(HIDDEN, HIDDEN), torch.nn.ReLU(), torch.nn.Linear(HIDDEN, outputs))
+
+    def forward(self, x):
+        return torch.sigmoid(self.body((x - self.mean) / self.std))
+
+
+def predict(net, x, x_mirror, order):
+    """Mirror-averaged, as the stage reads it: (f(x) + M f(mirror x)) / 2."""
+    net.eval()
+    with torch.no_grad():
+        return (net(x) + net(x_mirror)[:, order]) / 2
+
+
+def masked_mse(p, y):
+    m = ~torch.isnan(y)
+    return ((p - torch.nan_to_num(y)) ** 2 * m).sum() / m.sum().clamp_min(1)
+
+
+def validation_figures(p, y, names):
+    """Per expression: Pearson r against the labels, and the rest level: the REST_QUANTILE quantile
+    of the reading where the label is below 0.05, a sided shape pooled with its partner (the reading
+    is mirror-averaged). The validation people were chosen for showing expressions, several hold
+    their brows up most of the time, and the teacher reads browOuterUpLeft above 0.05 on all but 5
+    of their 505 frames. No gain, unlike the texture net's: the net reads the kind of input the
+    teacher reads, and least-squares gains on five people reached the cap of 3 for three lip shapes,
+    which then read 0.2 on a relaxed face."""
+    out = {}
+    for k, n in enumerate(names):
+        m = ~np.isnan(y[:, k])
+        a, b = p[m, k], y[m, k]
+        if m.sum() < 10 or a.std() < 1e-6 or b.std() < 1e-6:
+            out[n] = (float("nan"), 0.0)
+            continue
+        partner = names.index(mirror_name(n))
+        at_rest = np.concatenate([p[y[:, j] < 0.05, j] for j in sorted({k, partner})])
+        rest = float(np.quantile(at_rest if len(at_rest) >= 10 else a[b <= np.median(b)], REST_QUANTILE))
+        out[n] = (float(np.corrcoef(a, b)[0, 1]), rest)
+    return out
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--tracked", required=True, help="the folder of tracked clips (JSON lines, facetrack track --raw)")
+    p.add_argument("--net", required=True, help="the texture net's prefix (NET.columns.txt)")
+    p.add_argument("--teacher", default="../shared/data/teacher")
+    p.add_argument("--out", default="build/cnn/geometry")
+    p.add_argument("--epochs", type=int, default=60)
+    a = p.parse_args()
+    nets.setup_torch(2, seed=1)
+    with open(a.net + ".columns.txt") as f:
+        names = f.read().split()[6:]
+    teacher = Teacher(a.teacher)
+    splits = read_splits()
+    order = expression_mirror(names)
+
+    def stacked(parts, targets, with_mirror):
+        X = [features(*part) for part in parts]
+        Xm = [features(*mirrored(*part)) for part in parts]
+        Y = list(targets)
+        if with_mirror:  # the mirror images as samples of their own
+            X, Xm, Y = X + Xm, Xm + X, Y + [t[:, order] for t in targets]
+        return (torch.tensor(np.concatenate(X)), torch.tensor(np.concatenate(Xm)), torch.tensor(np.concatenate(Y)))
+
+    x_train, _, y_train = stacked(*load_clips(a.tracked, splits, "train", teacher, names), True)
+    x_val, xm_val, y_val = stacked(*load_clips(a.tracked, splits, "validation", teacher, names), False)
+    print(f"frames: {len(x_train)} training (with their mirror images), {len(x_val)} validation", flush=True)
+    net = GeometryNet(x_train.shape[1], len(names), x_train.mean(0), x_train.std(0).clamp_min(1e-4))
+    opt = torch.optim.AdamW(net.parameters(), lr=1e-3, weight_decay=1e-3)
+    best, best_state = float("inf"), None
+    for epoch in range(a.epochs):
+        net.train()
+        perm = torch.randperm(len(x_train))
+        for i in range(0, len(perm), 256):
+            idx = perm[i:i + 256]
+            # feature noise of 5 % of each feature's spread: the landmarks jitter
+            x = x_train[idx] + 0.05 * net.std * torch.randn(len(idx), x_train.shape[1])
+            loss = masked_mse(net(x), y_train[idx])
+            opt.zero_grad(); loss.backward(); opt.step()
+        score = masked_mse(predict(net, x_val, xm_val, order), y_val).item()
+        if score < best:
+            best, best_state = score, {k: v.clone() for k, v in net.state_dict().items()}
+        print(f"epoch {epoch + 1} train {loss.item():.5f} validation {score:.5f}", flush=True)
+    net.load_state_dict(best_state)
+    figures = validation_figures(predict(net, x_val, xm_val, order).numpy(), y_val.numpy(), names)
+    with open(a.out + ".validation_geometry.txt", "w") as f:
+        for n, (r, rest) in figures.items():
+            f.write(f"{n} {r:.4f} {rest:.4f}\n")
+    # The standardisation folded into the first layer: W' = W / std, b' = b - W' mean.
+    layers = [m for m in net.body if isinstance(m, torch.nn.Linear)]
+    with torch.no_grad():
+        first_w = layers[0].weight / net.std[None, :]
+        first_b = layers[0].bias - first_w @ net.mean
+    with open(a.out + ".geometry.txt", "w") as f:
+        f.write(f"facetrack geometry net 1\nlayers {len(layers)}\n")
+        for i, layer in enumerate(layers):
+            w, b = (first_w, first_b) if i == 0 else (layer.weight.detach(), layer.bias.detach())
+            f.write(f"{w.shape[0]} {w.shape[1]}\n")
+            f.write(" ".join(f"{v:.9g}" for v in w.reshape(-1).tolist()) + "\n")
+            f.write(" ".join(f"{v:.9g}" for v in b.tolist()) + "\n")
+        # a check pack_cnn and the tests repeat: the first validation frame's features and outputs
+        f.write(" ".join(f"{v:.9g}" for v in x_val[0].tolist()) + "\n")
+        f.write(" ".join(f"{v:.9g}" for v in net.eval()(x_val[:1])[0].tolist()) + "\n")
+    print(f"best validation {best:.5f}; wrote {a.out}.geometry.txt, {a.out}.validation_geometry.txt", flush=True)
+    print("validation r: " + " ".join(f"{n} {v[0]:.2f}" for n, v in figures.items() if v[0] == v[0]), flush=True)
+
+
+if __name__ == "__main__":
+    main()
