@@ -21,7 +21,8 @@ core::Shape68 someFace(unsigned seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> jitter(-4.f, 4.f);
     core::Shape68 p;
-    for (int i = 0; i < core::kLandmarks; ++i) p.col(i) << 200.f + 3.f * static_cast<float>(i % 17) + jitter(rng), 150.f + 2.f * static_cast<float>(i / 17) + jitter(rng);
+    for (int i = 0; i < core::kLandmarks; ++i)
+        p.col(i) << 200.f + 3.f * static_cast<float>(i % 17) + jitter(rng), 150.f + 2.f * static_cast<float>(i / 17) + jitter(rng);
     // the eyes level and apart, as on a face: the features' roll is the eye line's
     for (int i = 36; i < 42; ++i) p.col(i) << 170.f + jitter(rng), 140.f + jitter(rng);
     for (int i = 42; i < 48; ++i) p.col(i) << 230.f + jitter(rng), 140.f + jitter(rng);
@@ -92,7 +93,7 @@ TEST(GeometryNet, ReadsAFaceAndItsMirrorImageAlikeWithLeftAndRightSwapped) {
     expression::GeometryNet small(layers, {"jawOpen", "mouthClose"});
     const expression::GeometryFeatures f = expression::geometryFeatures(face, 0.0, 0.0);
     const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> w1(layers[0].weight.data(), 4,
-                                                                                                      nn::kGeometryFeatures);
+                                                                                                     nn::kGeometryFeatures);
     const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> w2(layers[1].weight.data(), 2, 4);
     const Eigen::VectorXf hidden = (w1 * f + Eigen::Map<const Eigen::VectorXf>(layers[0].bias.data(), 4)).cwiseMax(0.f);
     const Eigen::VectorXf logits = w2 * hidden + Eigen::Map<const Eigen::VectorXf>(layers[1].bias.data(), 2);

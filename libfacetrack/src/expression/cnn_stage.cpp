@@ -51,7 +51,7 @@ public:
         }
         return {"cnn", true,
                 std::string(cascade_->expressionsOnly()
-                                ? "expressions only (" + std::to_string(reported_.size()) +
+                                ? "expressions only (" + std::to_string(readCount()) +
                                       (model::dataOf(*cascade_).corrects_fit ? ", the fit's corrected" : " beside the fit's") + "), "
                                 : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
@@ -132,10 +132,17 @@ public:
     }
 
 private:
+    /// How many expressions the file reads (info() comes before connect() drops those an earlier stage owns).
+    int readCount() const {
+        const nn::CnnModelData& d = model::dataOf(*cascade_);
+        int n = 0;
+        for (std::size_t k = 0; k < d.expressions.size(); ++k)
+            n += d.reported.empty() || d.reported[k] || (!d.geometry_reported.empty() && d.geometry_reported[k]);
+        return n;
+    }
     int geometryCount() const {
         const auto& g = model::dataOf(*cascade_).geometry_reported;
-        return static_cast<int>(
-            std::count_if(reported_.begin(), reported_.end(), [&](const Reported& r) { return g[static_cast<std::size_t>(r.position)]; }));
+        return static_cast<int>(std::count(g.begin(), g.end(), true));
     }
 
     /// The geometry net's readings (geometry_net.hpp) in place of the texture's, for the expressions

@@ -40,7 +40,8 @@ GeometryFeatures mirroredGeometryFeatures(const core::Shape68& points, double pi
 
 GeometryNet::GeometryNet(std::vector<nn::DenseLayer> layers, const std::vector<std::string>& expressions) {
     for (const nn::DenseLayer& l : layers) {
-        weights_.push_back(Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(l.weight.data(), l.rows, l.cols));
+        weights_.push_back(
+            Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(l.weight.data(), l.rows, l.cols));
         biases_.push_back(Eigen::Map<const Eigen::VectorXf>(l.bias.data(), l.rows));
         activations_.emplace_back(l.rows);
     }

@@ -46,7 +46,6 @@ public:
     const Eigen::VectorXf& forward(const GeometryFeatures& f);
 
 private:
-
     std::vector<Eigen::MatrixXf> weights_;
     std::vector<Eigen::VectorXf> biases_;
     std::vector<int> mirror_;  ///< output k of the mirror image is output mirror_[k] of the face
