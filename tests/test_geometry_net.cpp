@@ -142,7 +142,7 @@ TEST(ShippedCnn, ReadsTheBrowsFromTheLandmarksGeometry) {
     models.cnn = CnnModel::load(path);
     const nn::CnnModelData& d = model::dataOf(*models.cnn);
     ASSERT_FALSE(d.geometry_net.empty());
-    for (const char* name : {"browInnerUp_L", "browInnerUp_R", "browOuterUp_L", "browOuterUp_R"}) {
+    for (const char* name : {"browInnerUp_L", "browInnerUp_R", "browDown_L", "browDown_R"}) {
         const auto it = std::find(d.expressions.begin(), d.expressions.end(), name);
         ASSERT_NE(it, d.expressions.end()) << name;
         EXPECT_TRUE(d.geometry_reported[static_cast<std::size_t>(it - d.expressions.begin())]) << name;

@@ -5,7 +5,7 @@ Landmarker's blendshapes read them (../shared/data/teacher: another model's pred
 truth; class Teacher of train_stage.py, each shape above its rest level).
 
   /usr/bin/python3 -m tools.train.expression.train_geometry --tracked build/tracked --net build/cnn/v2 \\
-        [--out build/cnn/geometry] [--epochs 60]
+        [--tracked-crops build/tracked_300w] [--out build/cnn/geometry] [--epochs 60]
 
 --tracked: a folder of `facetrack track CLIP --raw --profile none --out DIR/<clip name>.jsonl`, one
 per clip of ../shared/data/clips. The training people's clips train it (each frame and its mirror
@@ -70,29 +70,42 @@ def mirrored(points, pitch_deg, yaw_deg):
     return flipped, pitch_deg, -yaw_deg
 
 
+def read_tracked(path, key_of, teacher, names):
+    """The tracked lines of a `facetrack track --raw` file that the teacher read: ((points, pitch,
+    yaw), targets), or None; key_of(line number, record) is the teacher's key of a line."""
+    points, pitch, yaw, targets = [], [], [], []
+    with open(path) as f:
+        for i, line in enumerate(f):
+            r = json.loads(line)
+            raw = r.get("raw")
+            if not r["tracked"] or not raw or raw.get("landmarks") is None or raw.get("pose") is None:
+                continue
+            t = teacher.targets(key_of(i, r), names)
+            if t is None:
+                continue
+            points.append(raw["landmarks"]); pitch.append(raw["pose"]["euler_deg"][0]); yaw.append(raw["pose"]["euler_deg"][1])
+            targets.append(t)
+    if not points:
+        return None
+    return (np.array(points, np.float32), np.array(pitch, np.float32), np.array(yaw, np.float32)), np.array(targets, np.float32)
+
+
 def load_clips(folder, splits, which, teacher, names):
-    """Features, targets (NaN: no label) and clip names of the tracked frames of the clips in split `which`."""
-    X, Y = [], []
+    """Per clip of split `which`, ((points, pitch, yaw), targets) of its tracked frames."""
+    out = []
     for file in sorted(os.listdir(folder)):
         clip = file[:-len(".jsonl")] + ".mp4"
-        if not file.endswith(".jsonl") or splits.get(clip, "train") != which:
-            continue
-        points, pitch, yaw, targets = [], [], [], []
-        with open(os.path.join(folder, file)) as f:
-            for line in f:
-                r = json.loads(line)
-                raw = r.get("raw")
-                if not r["tracked"] or not raw or raw.get("landmarks") is None or raw.get("pose") is None:
-                    continue
-                t = teacher.targets(f"{clip}#{r['frame']}", names)
-                if t is None:
-                    continue
-                points.append(raw["landmarks"]); pitch.append(raw["pose"]["euler_deg"][0]); yaw.append(raw["pose"]["euler_deg"][1])
-                targets.append(t)
-        if points:
-            X.append((np.array(points, np.float32), np.array(pitch, np.float32), np.array(yaw, np.float32)))
-            Y.append(np.array(targets, np.float32))
-    return X, Y
+        if file.endswith(".jsonl") and splits.get(clip, "train") == which:
+            out.append(read_tracked(os.path.join(folder, file), lambda i, r: f"{clip}#{r['frame']}", teacher, names))
+    return [o for o in out if o is not None]
+
+
+def load_crops(folder, which, teacher, names):
+    """The 300-W crops of split `which` as tools/data/track_faces300w.sh tracked them."""
+    with open(os.path.join(folder, which + ".txt")) as f:
+        keys = f.read().split()
+    crops = read_tracked(os.path.join(folder, which + ".jsonl"), lambda i, r: keys[i], teacher, names)
+    return [crops] if crops is not None else []
 
 
 def expression_mirror(names):
@@ -123,18 +136,19 @@ def masked_mse(p, y):
     return ((p - torch.nan_to_num(y)) ** 2 * m).sum() / m.sum().clamp_min(1)
 
 
-def validation_figures(p, y, names):
-    """Per expression: Pearson r against the labels, and the rest level: the REST_QUANTILE quantile
-    of the reading where the label is below 0.05, a sided shape pooled with its partner (the reading
-    is mirror-averaged). The validation people were chosen for showing expressions, several hold
+def validation_figures(p, y, people, names):
+    """Per expression: Pearson r against the labels on the validation people's frames (the first
+    `people` samples: as the texture net's, which pack_cnn compares it with), and the rest level
+    over every validation sample: the REST_QUANTILE quantile of the reading where the label is below
+    0.05, a sided shape pooled with its partner (the reading is mirror-averaged). The validation people were chosen for showing expressions, several hold
     their brows up most of the time, and the teacher reads browOuterUpLeft above 0.05 on all but 5
     of their 505 frames. No gain, unlike the texture net's: the net reads the kind of input the
     teacher reads, and least-squares gains on five people reached the cap of 3 for three lip shapes,
     which then read 0.2 on a relaxed face."""
     out = {}
     for k, n in enumerate(names):
-        m = ~np.isnan(y[:, k])
-        a, b = p[m, k], y[m, k]
+        m = ~np.isnan(y[:people, k])
+        a, b = p[:people][m, k], y[:people][m, k]
         if m.sum() < 10 or a.std() < 1e-6 or b.std() < 1e-6:
             out[n] = (float("nan"), 0.0)
             continue
@@ -148,6 +162,9 @@ def validation_figures(p, y, names):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--tracked", required=True, help="the folder of tracked clips (JSON lines, facetrack track --raw)")
+    p.add_argument("--tracked-crops", default="", help="also the 300-W crops as tools/data/track_faces300w.sh tracked them "
+                   "(DIR/{train,validation}.{txt,jsonl}): the training crops train, the validation crops help choose the epoch "
+                   "and the rest levels")
     p.add_argument("--net", required=True, help="the texture net's prefix (NET.columns.txt)")
     p.add_argument("--teacher", default="../shared/data/teacher")
     p.add_argument("--out", default="build/cnn/geometry")
@@ -160,7 +177,8 @@ def main():
     splits = read_splits()
     order = expression_mirror(names)
 
-    def stacked(parts, targets, with_mirror):
+    def stacked(sets, with_mirror):
+        parts, targets = [p for p, _ in sets], [t for _, t in sets]
         X = [features(*part) for part in parts]
         Xm = [features(*mirrored(*part)) for part in parts]
         Y = list(targets)
@@ -168,9 +186,13 @@ def main():
             X, Xm, Y = X + Xm, Xm + X, Y + [t[:, order] for t in targets]
         return (torch.tensor(np.concatenate(X)), torch.tensor(np.concatenate(Xm)), torch.tensor(np.concatenate(Y)))
 
-    x_train, _, y_train = stacked(*load_clips(a.tracked, splits, "train", teacher, names), True)
-    x_val, xm_val, y_val = stacked(*load_clips(a.tracked, splits, "validation", teacher, names), False)
-    print(f"frames: {len(x_train)} training (with their mirror images), {len(x_val)} validation", flush=True)
+    crops = (lambda which: load_crops(a.tracked_crops, which, teacher, names)) if a.tracked_crops else (lambda which: [])
+    x_train, _, y_train = stacked(load_clips(a.tracked, splits, "train", teacher, names) + crops("train"), True)
+    people = stacked(load_clips(a.tracked, splits, "validation", teacher, names), False)
+    validation_crops = crops("validation")
+    x_val, xm_val, y_val = (torch.cat([people[i], stacked(validation_crops, False)[i]]) for i in range(3)) if validation_crops else people
+    print(f"samples: {len(x_train)} training (with their mirror images), {len(people[0])} validation people's frames, "
+          f"{len(x_val) - len(people[0])} validation crops", flush=True)
     net = GeometryNet(x_train.shape[1], len(names), x_train.mean(0), x_train.std(0).clamp_min(1e-4))
     opt = torch.optim.AdamW(net.parameters(), lr=1e-3, weight_decay=1e-3)
     best, best_state = float("inf"), None
@@ -188,7 +210,7 @@ def main():
             best, best_state = score, {k: v.clone() for k, v in net.state_dict().items()}
         print(f"epoch {epoch + 1} train {loss.item():.5f} validation {score:.5f}", flush=True)
     net.load_state_dict(best_state)
-    figures = validation_figures(predict(net, x_val, xm_val, order).numpy(), y_val.numpy(), names)
+    figures = validation_figures(predict(net, x_val, xm_val, order).numpy(), y_val.numpy(), len(people[0]), names)
     with open(a.out + ".validation_geometry.txt", "w") as f:
         for n, (r, rest) in figures.items():
             f.write(f"{n} {r:.4f} {rest:.4f}\n")

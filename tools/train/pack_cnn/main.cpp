@@ -277,6 +277,9 @@ int run(int argc, char** argv) {
         if (!args.has("--min-validation-r") || nets.empty()) throw Error("--geometry goes with --nets and --min-validation-r");
         const std::string prefix = args.get("--geometry");
         model.geometry_net = readGeometryNet(prefix, model.expressions);
+        model.geometry_reported.clear();  // --base's, if it has a geometry net
+        model.geometry_neutral.clear();
+        model.geometry_full.clear();
         const auto texture_r = pairAveraged(nets.back(), ".validation_r.txt", model.expressions);
         std::map<std::string, std::array<double, 2>> figures;  // r, rest level
         std::stringstream lines(readBytes(prefix + ".validation_geometry.txt"));
