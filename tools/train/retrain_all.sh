@@ -91,7 +91,11 @@ run_step() {
         FACETRACK_MODEL_DIR=$models $bin/facetrack track "$clip" --raw --profile none \
           --out "build/tracked/$(basename "$clip" .mp4).jsonl" 2>/dev/null
       done
-      "${py[@]}" tools.train.expression.train_geometry --tracked build/tracked --net build/cnn/v2 --out build/cnn/geometry
+      for split in train validation; do
+        FACETRACK_MODEL_DIR=$models tools/data/track_faces300w.sh $split build/tracked_300w
+      done
+      "${py[@]}" tools.train.expression.train_geometry --tracked build/tracked --tracked-crops build/tracked_300w \
+        --net build/cnn/v2 --out build/cnn/geometry
       $bin/pack_cnn --base $models/cnn_cascade.ftm --nets build/cnn/v2.onnx --expressions-only --rest-from-validation \
         --gain-from-validation --mirror-average --min-validation-r 0.1 --leave-out cheekSquint_L,cheekSquint_R,noseSneer_L,noseSneer_R \
         --corrects-fit --geometry build/cnn/geometry --out $models/cnn_cascade.ftm \

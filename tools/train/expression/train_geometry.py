@@ -8,9 +8,11 @@ truth; class Teacher of train_stage.py, each shape above its rest level).
         [--tracked-crops build/tracked_300w] [--out build/cnn/geometry] [--epochs 60]
 
 --tracked: a folder of `facetrack track CLIP --raw --profile none --out DIR/<clip name>.jsonl`, one
-per clip of ../shared/data/clips. The training people's clips train it (each frame and its mirror
-image), the validation people's (data/clip_splits.csv) choose the epoch; the held-out people's are
-never read. --net: the texture net it is packed beside (NET.columns.txt: the expressions, in order).
+per clip of ../shared/data/clips; --tracked-crops: the 300-W crops as tools/data/track_faces300w.sh
+tracks them. The training people's clips and the training crops train it (each face and its mirror
+image); the validation people's (data/clip_splits.csv) and the validation crops choose the epoch
+and the rest levels, the validation people's the shapes pack_cnn reads from it; the held-out
+people's clips are never read. --net: the texture net it is packed beside (NET.columns.txt: the expressions, in order).
 
 Writes OUT.geometry.txt (the net, input standardisation folded into its first layer: pack_cnn
 --geometry reads it) and OUT.validation_geometry.txt (per expression: Pearson r and the rest level
