@@ -4,9 +4,11 @@
 // frame into the canonical patch at the current parameters (face_warp.hpp),
 // regresses the update (update_net.hpp) and applies it, `rounds` times.
 //
-// Reads: pose, expression, identity (the fit's). Writes: pose and the
-// cascade's expressions (the others stay as the fit left them), and landmarks
-// when the file has a landmark net; a cascade that reads only expressions
+// Reads: pose, expression, identity (the fit's), and the landmarks when the
+// file has a geometry net (geometry_net.hpp: its expressions are read from the
+// landmarks' shape instead of the texture). Writes: pose and the cascade's
+// expressions (the others stay as the fit left them), and landmarks when the
+// file has a landmark net; a cascade that reads only expressions
 // (CnnModel::expressionsOnly) writes those no earlier stage estimates, and
 // with corrects_fit the fit's too (the shipped file).
 // Never loses a face: the fit's checks decide that.
