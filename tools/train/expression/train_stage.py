@@ -273,10 +273,16 @@ def teacher_readings(net, validation, scale, mirror, names):
 
 def write_teacher_figures(out, readings, rest, names):
     """OUT.validation_{r,rest,gain}.txt from teacher_readings: r and gain on the validation people's
-    frames and warped copies, the rest levels on the 300-W validation crops."""
+    frames and warped copies, the rest levels on the 300-W validation crops; and
+    OUT.validation_r_frames.txt, r on the people's frames alone: what pack_cnn compares the geometry
+    net's r on the same frames with."""
     people = [readings[n] for n in ("clips", "clips_moved") if n in readings]
     estimate, label, mask = (torch.cat([r[i] for r in people]) for i in range(3))
     write_agreement(out, masked_agreement(estimate, label, mask, names))
+    if "clips" in readings:
+        with open(out + ".validation_r_frames.txt", "w") as f:
+            for n, r in masked_agreement(*readings["clips"], names).items():
+                f.write(f"{n} {r:.4f}\n")
     write_rest_levels(out, rest)
     write_gains(out, gains(estimate, label, mask, rest, names))
 

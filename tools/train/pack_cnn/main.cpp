@@ -39,9 +39,9 @@
 // (cnn_model_data.hpp).
 // --geometry PREFIX (with --nets and --min-validation-r): the geometry net of
 // tools/train/expression/train_geometry.py (PREFIX.geometry.txt; expression/geometry_net.hpp). A
-// shape is read from it where its r on the validation people (PREFIX.validation_geometry.txt, a
-// pair's mean) is at least R and beats the texture net's by kGeometryMargin, between its rest level
-// there and 1.
+// shape is read from it where its r on the validation people's frames (PREFIX.validation_geometry.txt,
+// a pair's mean) is at least R and above the texture net's on the same frames (the trainer's
+// OUT.validation_r_frames.txt), between its rest level there and 1.
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
@@ -119,11 +119,6 @@ std::vector<double> pairAveraged(const std::string& onnxPath, const std::string&
     }
     return out;
 }
-
-/// How much better than the texture's a shape's geometry reading must agree with the validation
-/// people's labels to replace it: r over five people's ~500 frames, consecutive frames alike, moves
-/// by about this much from one set of people to another.
-constexpr double kGeometryMargin = 0.1;
 
 /// The geometry net of train_geometry.py's PREFIX.geometry.txt, checked against the trainer's own
 /// reading of one validation frame written after it.
@@ -280,7 +275,8 @@ int run(int argc, char** argv) {
         model.geometry_reported.clear();  // --base's, if it has a geometry net
         model.geometry_neutral.clear();
         model.geometry_full.clear();
-        const auto texture_r = pairAveraged(nets.back(), ".validation_r.txt", model.expressions);
+        // on the same frames as the geometry net's: the validation people's, without the warped copies
+        const auto texture_r = pairAveraged(nets.back(), ".validation_r_frames.txt", model.expressions);
         std::map<std::string, std::array<double, 2>> figures;  // r, rest level
         std::stringstream lines(readBytes(prefix + ".validation_geometry.txt"));
         std::string name, r, rest;
@@ -300,7 +296,7 @@ int run(int argc, char** argv) {
         for (std::size_t k = 0; k < model.expressions.size(); ++k) {
             const std::string& n = model.expressions[k];
             const double geometry_r = pair(n, 0);
-            const bool kept = geometry_r >= std::max(minimum, texture_r[k] + kGeometryMargin) &&
+            const bool kept = geometry_r >= minimum && geometry_r > texture_r[k] &&
                               std::find(leftOut.begin(), leftOut.end(), n) == leftOut.end();
             const float neutral = std::clamp(static_cast<float>(pair(n, 1)), 0.f, 0.9f);
             model.geometry_reported.push_back(kept);
