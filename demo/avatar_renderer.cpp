@@ -63,6 +63,53 @@ constexpr int kTeethEnd = 21451;
 
 glm::vec3 toGlm(const Vec3& v) { return {v.x, v.y, v.z}; }
 
+/// Distance from p to the segment [a, b].
+float segmentDistance(glm::vec2 p, glm::vec2 a, glm::vec2 b) {
+    const glm::vec2 ab = b - a;
+    const float t = glm::clamp(glm::dot(p - a, ab) / std::max(glm::dot(ab, ab), 1e-6f), 0.f, 1.f);
+    return glm::length(p - (a + t * ab));
+}
+
+/// Whether p lies inside the polygon (even-odd rule).
+bool inside(glm::vec2 p, const std::vector<glm::vec2>& polygon) {
+    bool in = false;
+    for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+        const glm::vec2 a = polygon[i], b = polygon[j];
+        if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
+    }
+    return in;
+}
+
+/// Per skin vertex of the neutral face, whether it lies on a brow (within 2.5 mm of the 300-W
+/// brow line, seen from the front) or on the lips (inside the outer lip line): a bald, browless
+/// head would hide a raised brow, and flat lips a pucker's shape.
+enum class Feature { Skin, Brow, Lips };
+std::vector<Feature> facialFeatures(const FaceModel& model, const std::vector<Vec3>& rest, glm::vec3 front) {
+    const std::vector<Vec3> marks = model.landmarkPoints(rest);
+    const auto flat = [](const Vec3& v) { return glm::vec2(v.x, v.y); };
+    std::vector<glm::vec2> lips;
+    for (int i = 48; i < 60; ++i) lips.push_back(flat(marks[static_cast<std::size_t>(i)]));
+    float nearest = 1e9f;  // the brow line's depth: vertices well behind it are the head's back
+    for (int i = 17; i < 27; ++i) nearest = std::min(nearest, glm::dot(toGlm(marks[static_cast<std::size_t>(i)]), front));
+    std::vector<Feature> out(rest.size(), Feature::Skin);
+    for (int v = 0; v < model.faceVertexCount() && v < static_cast<int>(rest.size()); ++v) {
+        const glm::vec3 p = toGlm(rest[static_cast<std::size_t>(v)]);
+        if (glm::dot(p, front) < nearest - 15.f) continue;
+        const glm::vec2 q(p.x, p.y);
+        if (inside(q, lips)) {
+            out[static_cast<std::size_t>(v)] = Feature::Lips;
+            continue;
+        }
+        for (const int start : {17, 22}) {
+            for (int i = start; i < start + 4; ++i) {
+                if (segmentDistance(q, flat(marks[static_cast<std::size_t>(i)]), flat(marks[static_cast<std::size_t>(i + 1)])) < 2.5f)
+                    out[static_cast<std::size_t>(v)] = Feature::Brow;
+            }
+        }
+    }
+    return out;
+}
+
 }  // namespace
 
 AvatarState AvatarState::of(const FaceResult& face) {
@@ -92,6 +139,14 @@ AvatarRenderer::AvatarRenderer(std::shared_ptr<const FaceModel> model) : model_(
         for (int v = kGumsEnd; v < kTeethEnd; ++v) paint(v, {0.92f, 0.90f, 0.84f});
     }
     const auto rest = model_->vertices({}, {});
+    if (ict_layout) {
+        const std::vector<Feature> features = facialFeatures(*model_, rest,
+                                                             glm::normalize(toGlm(left.optical_axis) + toGlm(right.optical_axis)));
+        for (std::size_t v = 0; v < features.size(); ++v) {
+            if (features[v] == Feature::Brow) paint(static_cast<int>(v), {0.30f, 0.20f, 0.14f});
+            if (features[v] == Feature::Lips) paint(static_cast<int>(v), {0.72f, 0.40f, 0.40f});
+        }
+    }
     for (const auto& eye : {left, right}) {
         const float iris_cos = std::cos(std::asin(std::min(1.f, eye.iris_radius_mm / eye.radius_mm)));
         const float pupil_cos = std::cos(std::asin(std::min(1.f, 0.45f * eye.iris_radius_mm / eye.radius_mm)));
