@@ -82,7 +82,7 @@ typedef struct ft_tracker_config {
     int32_t landmark_starts;    /* landmark passes averaged, 1..9; each ~0.2 ms (3) */
     /* Added after the first release of this struct: an older caller's struct_size ends before it
        and it keeps its default. */
-    int32_t cnn_stage; /* the CNN file's cascade stages: the shipped expression net, ~0.3 ms (1) */
+    int32_t cnn_stage; /* the CNN file's cascade stages: the shipped expression nets, ~0.3 ms (1) */
 } ft_tracker_config;
 
 /* How one ARKit weight is reported (the C++ ShapeCalibration, facetrack/calibration.hpp):

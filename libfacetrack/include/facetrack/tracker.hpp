@@ -94,9 +94,10 @@ struct TrackerConfig {
     /// steadies the points too; without the CNN file five jitter less.
     int landmark_starts = 3;
     /// Run the CNN file's cascade stages (the "cnn" stage). The shipped file's
-    /// reads 24 ARKit shapes from the face's texture and corrects the fit's
-    /// (pucker, the brows, squint, press; docs/cnn.md) in about 0.25 ms a frame
-    /// on one core; false leaves the fit's 15 and the file's refiners only.
+    /// reads 32 ARKit shapes from the face's texture and the landmarks' geometry
+    /// and corrects the fit's (the brows, pucker, squint, press; docs/cnn.md) in
+    /// about 0.25 ms a frame on one core; false leaves the fit's 15 and the
+    /// file's refiners only.
     bool cnn_stage = true;
 };
 
