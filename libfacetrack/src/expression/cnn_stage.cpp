@@ -137,7 +137,7 @@ private:
         const nn::CnnModelData& d = model::dataOf(*cascade_);
         int n = 0;
         for (std::size_t k = 0; k < d.expressions.size(); ++k)
-            n += d.reported.empty() || d.reported[k] || (!d.geometry_reported.empty() && d.geometry_reported[k]);
+            n += d.reported.empty() || d.reported[k] || (geometry_net_ && d.geometry_reported[k]);
         return n;
     }
     int geometryCount() const {

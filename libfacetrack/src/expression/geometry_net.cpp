@@ -6,9 +6,7 @@
 
 namespace facetrack::expression {
 
-namespace {
-
-GeometryFeatures featuresOf(const core::Shape68& points, double pitchDeg, double yawDeg) {
+GeometryFeatures geometryFeatures(const core::Shape68& points, double pitchDeg, double yawDeg) {
     const Eigen::Vector2f centre = points.rowwise().mean();
     const Eigen::Vector2f eyeLine = points.middleCols<6>(42).rowwise().mean() - points.middleCols<6>(36).rowwise().mean();
     const float theta = std::atan2(eyeLine.y(), eyeLine.x());
@@ -23,19 +21,13 @@ GeometryFeatures featuresOf(const core::Shape68& points, double pitchDeg, double
     return f;
 }
 
-}  // namespace
-
-GeometryFeatures geometryFeatures(const core::Shape68& points, double pitchDeg, double yawDeg) {
-    return featuresOf(points, pitchDeg, yawDeg);
-}
-
 GeometryFeatures mirroredGeometryFeatures(const core::Shape68& points, double pitchDeg, double yawDeg) {
     core::Shape68 mirrored;
     for (int i = 0; i < core::kLandmarks; ++i) {
         const int from = core::kMirror68[static_cast<std::size_t>(i)];
         mirrored.col(i) << -points(0, from), points(1, from);
     }
-    return featuresOf(mirrored, pitchDeg, -yawDeg);
+    return geometryFeatures(mirrored, pitchDeg, -yawDeg);
 }
 
 GeometryNet::GeometryNet(std::vector<nn::DenseLayer> layers, const std::vector<std::string>& expressions) {

@@ -15,8 +15,9 @@ and the rest levels, the validation people's the shapes pack_cnn reads from it; 
 people's clips are never read. --net: the texture net it is packed beside (NET.columns.txt: the expressions, in order).
 
 Writes OUT.geometry.txt (the net, input standardisation folded into its first layer: pack_cnn
---geometry reads it) and OUT.validation_geometry.txt (per expression: Pearson r and the rest level
-on the validation people, read mirror-averaged as the stage reads them).
+--geometry reads it), OUT.validation_geometry_r.txt and OUT.validation_geometry_rest.txt (per
+expression: Pearson r and the rest level on the validation people, read mirror-averaged as the
+stage reads them).
 
 The features (expression/geometry_net.hpp computes the same): the 68 points centred on their mean,
 rotated so that the line between the eyes' centres (means of points 36-41 and 42-47) is level,
@@ -30,6 +31,7 @@ import torch
 
 from tools.train import nets
 from tools.train.expression.train_stage import REST_QUANTILE, Teacher, mirror_name
+from tools.train.refine.train_refine import MIRROR
 
 HIDDEN = 256
 
@@ -37,19 +39,6 @@ HIDDEN = 256
 def read_splits(path="data/clip_splits.csv"):
     with open(path) as f:
         return {r["clip"]: r["split"] for r in csv.DictReader(line for line in f if not line.startswith("#"))}
-
-
-def landmark_mirror():
-    """Point i of a face's mirror image is point MIRROR[i] of the face (300-W's 68-point scheme)."""
-    jaw = list(range(16, -1, -1))
-    brows = list(range(26, 16, -1))
-    nose = [27, 28, 29, 30, 35, 34, 33, 32, 31]
-    eyes = [45, 44, 43, 42, 47, 46, 39, 38, 37, 36, 41, 40]
-    mouth = [54, 53, 52, 51, 50, 49, 48, 59, 58, 57, 56, 55, 64, 63, 62, 61, 60, 67, 66, 65]
-    return jaw + brows + nose + eyes + mouth
-
-
-MIRROR = landmark_mirror()
 
 
 def features(points, pitch_deg, yaw_deg):
@@ -213,9 +202,10 @@ def main():
         print(f"epoch {epoch + 1} train {loss.item():.5f} validation {score:.5f}", flush=True)
     net.load_state_dict(best_state)
     figures = validation_figures(predict(net, x_val, xm_val, order).numpy(), y_val.numpy(), len(people[0]), names)
-    with open(a.out + ".validation_geometry.txt", "w") as f:
-        for n, (r, rest) in figures.items():
-            f.write(f"{n} {r:.4f} {rest:.4f}\n")
+    for i, what in enumerate(("r", "rest")):
+        with open(f"{a.out}.validation_geometry_{what}.txt", "w") as f:
+            for n, values in figures.items():
+                f.write(f"{n} {values[i]:.4f}\n")
     # The standardisation folded into the first layer: W' = W / std, b' = b - W' mean.
     layers = [m for m in net.body if isinstance(m, torch.nn.Linear)]
     with torch.no_grad():
@@ -231,7 +221,7 @@ def main():
         # a check pack_cnn and the tests repeat: the first validation frame's features and outputs
         f.write(" ".join(f"{v:.9g}" for v in x_val[0].tolist()) + "\n")
         f.write(" ".join(f"{v:.9g}" for v in net.eval()(x_val[:1])[0].tolist()) + "\n")
-    print(f"best validation {best:.5f}; wrote {a.out}.geometry.txt, {a.out}.validation_geometry.txt", flush=True)
+    print(f"best validation {best:.5f}; wrote {a.out}.geometry.txt, {a.out}.validation_geometry_{{r,rest}}.txt", flush=True)
     print("validation r: " + " ".join(f"{n} {v[0]:.2f}" for n, v in figures.items() if v[0] == v[0]), flush=True)
 
 

@@ -185,10 +185,15 @@ def load(samples_dir, name, splits):
 MAX_DISPLACEMENT_PX = 24.0
 
 
+def estimate_of(pred, update, labels):
+    """The expressions as the stage reports them: the start (label - update) moved by the predicted
+    update, clamped to [0, 1]."""
+    return (labels - update[:, 6:] + pred[:, 6:]).clamp(0, 1)
+
+
 def expression_agreement(pred, update, labels, names):
-    """Per expression, Pearson r between the estimate (start + predicted update, clamped to [0, 1])
-    and the label, where start = label - update."""
-    estimate = (labels - update[:, 6:] + pred[:, 6:]).clamp(0, 1)
+    """Per expression, Pearson r between estimate_of() and the label."""
+    estimate = estimate_of(pred, update, labels)
     out = {}
     for k, n in enumerate(names):
         a, b = estimate[:, k] - estimate[:, k].mean(), labels[:, k] - labels[:, k].mean()
@@ -251,7 +256,7 @@ REST_QUANTILE = 0.9
 def rest_levels(pred, update, labels, names):
     """Per expression, how high the estimate reads on faces that do not show the shape: its 0.9
     quantile over the crops whose label is at most the label's median there."""
-    estimate = (labels - update[:, 6:] + pred[:, 6:]).clamp(0, 1)
+    estimate = estimate_of(pred, update, labels)
     out = {}
     for k, n in enumerate(names):
         at_rest = labels[:, k] <= labels[:, k].median()
@@ -259,13 +264,18 @@ def rest_levels(pred, update, labels, names):
     return out
 
 
+def reading(pred, update, labels, mask):
+    """(estimate_of(), label, mask) of the expressions."""
+    return estimate_of(pred, update, labels), labels, mask[:, 6:]
+
+
 def teacher_readings(net, validation, scale, mirror, names):
-    """Per validation set, (estimate, label, mask) of the expressions as the stage reads them
-    (start + update, mirror-averaged), and the rest levels on the 300-W crops."""
+    """Per validation set, reading() as the stage reads it (mirror-averaged), and the rest levels
+    on the 300-W crops."""
     readings, rest = {}, None
     for name, (x_val, y_val, labels_val, m_val) in validation.items():
         pred = predict(net, x_val, scale, mirror)
-        readings[name] = ((labels_val - y_val[:, 6:] + pred[:, 6:]).clamp(0, 1), labels_val, m_val[:, 6:])
+        readings[name] = reading(pred, y_val, labels_val, m_val)
         if name == "faces300w":
             rest = rest_levels(pred, y_val, labels_val, names)
     return readings, rest
@@ -555,7 +565,7 @@ def main():
                 expr_before = ((y_val[:, 6:].abs() * m_expr).sum() / m_expr.sum().clamp_min(1)).item()
                 expr_after = (((pred[:, 6:] - y_val[:, 6:]).abs() * m_expr).sum() / m_expr.sum().clamp_min(1)).item()
                 if TEACHER is not None:
-                    readings[name] = ((labels_val - y_val[:, 6:] + pred[:, 6:]).clamp(0, 1), labels_val, m_expr)
+                    readings[name] = reading(pred, y_val, labels_val, m_val)
                     if name == "faces300w":
                         rest = rest_levels(pred, y_val, labels_val, columns[6:])
                 if name == "faces300w":

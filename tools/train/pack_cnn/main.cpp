@@ -39,9 +39,9 @@
 // (cnn_model_data.hpp).
 // --geometry PREFIX (with --nets and --min-validation-r): the geometry net of
 // tools/train/expression/train_geometry.py (PREFIX.geometry.txt; expression/geometry_net.hpp). A
-// shape is read from it where its r on the validation people's frames (PREFIX.validation_geometry.txt,
+// shape is read from it where its r on the validation people's frames (PREFIX.validation_geometry_r.txt,
 // a pair's mean) is at least R and above the texture net's on the same frames (the trainer's
-// OUT.validation_r_frames.txt), between its rest level there and 1.
+// OUT.validation_r_frames.txt), between its rest level there (PREFIX.validation_geometry_rest.txt) and 1.
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
@@ -62,7 +62,6 @@
 #include "nn/cnn_model_data.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -98,11 +97,15 @@ std::vector<std::string> expressionColumns(const std::string& onnxPath) {
     return {names.begin() + static_cast<std::ptrdiff_t>(pose.size()), names.end()};
 }
 
-/// Per expression, the value the trainer's OUT.SUFFIX beside the last net gives it (lines "name
-/// value"), averaged with its mirror partner's (fit::mirrorName: browDown_L and browDown_R, jawLeft
-/// and jawRight) so that a face and its mirror image are treated alike.
-std::vector<double> pairAveraged(const std::string& onnxPath, const std::string& suffix, const std::vector<std::string>& names) {
-    const std::string path = onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + suffix;
+/// The trainer's OUT.SUFFIX beside the net OUT.onnx.
+std::string beside(const std::string& onnxPath, const std::string& suffix) {
+    return onnxPath.substr(0, onnxPath.size() - std::string(".onnx").size()) + suffix;
+}
+
+/// Per expression, the value a trainer's file gives it (lines "name value"), averaged with its
+/// mirror partner's (fit::mirrorName: browDown_L and browDown_R, jawLeft and jawRight) so that a
+/// face and its mirror image are treated alike.
+std::vector<double> pairAveraged(const std::string& path, const std::vector<std::string>& names) {
     std::stringstream lines(readBytes(path));
     std::map<std::string, double> value;
     std::string name, text;
@@ -236,7 +239,7 @@ int run(int argc, char** argv) {
             model.neutral = trainingMedians(args.get("--neutral-from"), model.expressions);
         } else {
             if (nets.empty()) throw Error("--rest-from-validation needs the nets (--nets)");
-            for (const double level : pairAveraged(nets.back(), ".validation_rest.txt", model.expressions))
+            for (const double level : pairAveraged(beside(nets.back(), ".validation_rest.txt"), model.expressions))
                 model.neutral.push_back(std::clamp(static_cast<float>(level), 0.f, 0.9f));
         }
         for (std::size_t k = 0; k < model.neutral.size(); ++k) {
@@ -245,7 +248,7 @@ int run(int argc, char** argv) {
     }
     if (args.has("--gain-from-validation")) {
         if (!args.has("--rest-from-validation")) throw Error("--gain-from-validation goes with --rest-from-validation");
-        const std::vector<double> gain = pairAveraged(nets.back(), ".validation_gain.txt", model.expressions);
+        const std::vector<double> gain = pairAveraged(beside(nets.back(), ".validation_gain.txt"), model.expressions);
         for (std::size_t k = 0; k < model.neutral.size(); ++k) {
             const double g = std::clamp(gain[k], 1.0, 10.0);
             model.full.push_back(static_cast<float>(model.neutral[k] + (1.0 - model.neutral[k]) / g));
@@ -256,7 +259,8 @@ int run(int argc, char** argv) {
         if (!model.expressions_only) throw Error("--min-validation-r goes with --expressions-only");
         const double minimum = args.number("--min-validation-r", 0.5);
         model.reported.clear();
-        for (const double r : pairAveraged(nets.back(), ".validation_r.txt", model.expressions)) model.reported.push_back(r >= minimum);
+        for (const double r : pairAveraged(beside(nets.back(), ".validation_r.txt"), model.expressions))
+            model.reported.push_back(r >= minimum);
         for (const std::string& name : tools::splitList(args.get("--leave-out", ""))) {
             const auto it = std::find(model.expressions.begin(), model.expressions.end(), name);
             if (it == model.expressions.end()) throw Error("--leave-out: the nets have no expression '" + name + "'");
@@ -276,33 +280,20 @@ int run(int argc, char** argv) {
         model.geometry_neutral.clear();
         model.geometry_full.clear();
         // on the same frames as the geometry net's: the validation people's, without the warped copies
-        const auto texture_r = pairAveraged(nets.back(), ".validation_r_frames.txt", model.expressions);
-        std::map<std::string, std::array<double, 2>> figures;  // r, rest level
-        std::stringstream lines(readBytes(prefix + ".validation_geometry.txt"));
-        std::string name, r, rest;
-        while (lines >> name >> r >> rest) figures[name] = {std::stod(r), std::stod(rest)};
-        const auto pair = [&](const std::string& n, int i) {
-            const auto value = [&](const std::string& m) {
-                const auto it = figures.find(m);
-                if (it == figures.end()) throw Error(prefix + ".validation_geometry.txt has no " + m);
-                return std::isfinite(it->second[static_cast<std::size_t>(i)]) ? it->second[static_cast<std::size_t>(i)] : 0.0;
-            };
-            const std::string partner = fit::mirrorName(n);
-            return 0.5 * (value(n) + value(partner.empty() ? n : partner));
-        };
+        const auto texture_r = pairAveraged(beside(nets.back(), ".validation_r_frames.txt"), model.expressions);
+        const auto geometry_r = pairAveraged(prefix + ".validation_geometry_r.txt", model.expressions);
+        const auto geometry_rest = pairAveraged(prefix + ".validation_geometry_rest.txt", model.expressions);
         const double minimum = args.number("--min-validation-r", 0.5);
         const auto leftOut = tools::splitList(args.get("--leave-out", ""));
         std::printf("read from the geometry:");
         for (std::size_t k = 0; k < model.expressions.size(); ++k) {
             const std::string& n = model.expressions[k];
-            const double geometry_r = pair(n, 0);
-            const bool kept = geometry_r >= minimum && geometry_r > texture_r[k] &&
+            const bool kept = geometry_r[k] >= minimum && geometry_r[k] > texture_r[k] &&
                               std::find(leftOut.begin(), leftOut.end(), n) == leftOut.end();
-            const float neutral = std::clamp(static_cast<float>(pair(n, 1)), 0.f, 0.9f);
             model.geometry_reported.push_back(kept);
-            model.geometry_neutral.push_back(neutral);
+            model.geometry_neutral.push_back(std::clamp(static_cast<float>(geometry_rest[k]), 0.f, 0.9f));
             model.geometry_full.push_back(1.f);  // no gain: train_geometry.py says why
-            if (kept) std::printf(" %s (r %.2f against %.2f)", n.c_str(), geometry_r, texture_r[k]);
+            if (kept) std::printf(" %s (r %.2f against %.2f)", n.c_str(), geometry_r[k], texture_r[k]);
         }
         std::printf("\n");
     }
