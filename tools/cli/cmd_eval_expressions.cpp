@@ -41,7 +41,8 @@ people data/clip_splits.csv holds out of all training, beside the labels):
   response  per labelled expression, the mean of its shapes minus their neutral mean; then the
             same for each of its segments; beside each, the blendshape teacher's on the same frames
   mirror    mean |left shape (image) - right shape (mirrored image)| over all frames
-  yaw       the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg), the largest change
+  yaw       per clip, the neutral frames' mean per |yaw| bin (0-10, 10-20, 20-30 deg) minus the clip's
+            0-10 deg mean, pooled over the clips; the largest change
             (eyeLook excluded: a turned head's eyes turn back to the camera)
   teacher   MediaPipe Face Landmarker's blendshapes on the same frames (../shared/data/teacher/
             clips_blendshapes.csv: another model's predictions, not ground truth): its neutral, its
@@ -233,7 +234,12 @@ Track trackOf(const std::map<std::string, Weights>& labels, const std::string& c
 struct SegmentFigures {
     std::array<double, kArkitBlendshapeCount> neutral{};  ///< mean per shape over the neutral frames
     long neutral_frames = 0;
-    std::vector<std::pair<float, Weights>> byYaw;  ///< the neutral frames with their |yaw|
+    struct NeutralFrame {
+        std::string clip;
+        float yaw = 0.f;  ///< |yaw|, degrees: the tracker's, also for a teacher's figures
+        Weights weights{};
+    };
+    std::vector<NeutralFrame> byYaw;
     struct Response {
         long frames = 0;
         std::vector<double> above;  ///< per expected shape: its mean minus its neutral mean
@@ -241,6 +247,52 @@ struct SegmentFigures {
     std::map<std::string, Response> labels;  ///< pooled over a label's segments
     std::vector<Response> segments;          ///< per segment, in the labels' order
 };
+
+/// Head-turn invariance on the neutral frames: per clip and |yaw| bin (0-10, 10-20, 20-30 deg, at
+/// least 10 frames each), each shape's mean minus the same clip's 0-10 deg mean, pooled over the
+/// clips weighted by the turned bin's frames; the largest change over shapes and bins. Within a
+/// clip, so that the figure compares a face with itself turned, not one person with another.
+struct YawDrift {
+    std::array<long, 3> frames{};  ///< neutral frames per bin, all clips
+    double change = 0;
+    std::string shape = "-";
+};
+
+YawDrift yawDrift(const std::vector<SegmentFigures::NeutralFrame>& frames) {
+    YawDrift out;
+    struct Bin {
+        std::array<double, kArkitBlendshapeCount> sum{};
+        long frames = 0;
+    };
+    std::map<std::string, std::array<Bin, 3>> byClip;
+    for (const auto& f : frames) {
+        if (f.yaw > 30.f) continue;
+        const auto bin = static_cast<std::size_t>(std::min(2, static_cast<int>(f.yaw / 10.f)));
+        Bin& b = byClip[f.clip][bin];
+        for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) b.sum[k] += f.weights[k];
+        ++b.frames, ++out.frames[bin];
+    }
+    for (std::size_t bin = 1; bin < 3; ++bin) {
+        std::array<double, kArkitBlendshapeCount> change{};
+        long weight = 0;
+        for (const auto& [clip, bins] : byClip) {
+            const Bin &frontal = bins[0], &turned = bins[bin];
+            if (frontal.frames < 10 || turned.frames < 10) continue;
+            for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k)
+                change[k] += static_cast<double>(turned.frames) *
+                             (turned.sum[k] / static_cast<double>(turned.frames) - frontal.sum[k] / static_cast<double>(frontal.frames));
+            weight += turned.frames;
+        }
+        for (std::size_t k = 0; weight > 0 && k < kArkitBlendshapeCount; ++k) {
+            // A turned head's eyes turn back to the camera: the look shapes move by design.
+            const std::string name(arkitNames()[k]);
+            if (name.rfind("eyeLook", 0) == 0) continue;
+            const double c = std::fabs(change[k] / static_cast<double>(weight));
+            if (c > out.change) out.change = c, out.shape = name;
+        }
+    }
+    return out;
+}
 
 /// The neutral bias and the responses of `tracks` on the labelled segments. Neutral: every frame
 /// of every neutral segment but the calibrating ones.
@@ -255,7 +307,7 @@ SegmentFigures segmentFigures(const std::vector<Segment>& segments, const std::m
             if (!a) continue;
             if (calibrating.count(s.clip) && f <= calibrating.at(s.clip)->first) continue;  // the calibration frame (and before)
             for (std::size_t k = 0; k < kArkitBlendshapeCount; ++k) out.neutral[k] += (*a)[k];
-            out.byYaw.push_back({std::fabs(t.yaw[static_cast<std::size_t>(f)]), *a});
+            out.byYaw.push_back({s.clip, std::fabs(t.yaw[static_cast<std::size_t>(f)]), *a});
             ++out.neutral_frames;
         }
     }
@@ -510,7 +562,10 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     std::optional<SegmentFigures> teacherFigures;
     if (!teacher.empty()) {
         std::map<std::string, Track> teacherTracks;
-        for (const auto& clip : clips) teacherTracks[clip] = trackOf(teacher, clip, tracks[clip].arkit.size());
+        for (const auto& clip : clips) {
+            teacherTracks[clip] = trackOf(teacher, clip, tracks[clip].arkit.size());
+            teacherTracks[clip].yaw = tracks[clip].yaw;  // binned by the tracker's yaw, as ours
+        }
         teacherFigures = segmentFigures(segments, teacherTracks, calibrating);
     }
     printFigures(segments, neutralFigures, teacherFigures ? &*teacherFigures : nullptr);
@@ -536,32 +591,16 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
         std::printf("mirror: mean |L(image) - R(mirrored image)| %.3f over %ld shape-frames of the sided shapes (target <= 0.05)\n",
                     n ? sum / static_cast<double>(n) : std::nan(""), n);
     }
-    // Head-turn invariance on the neutral frames.
-    std::array<std::array<double, kArkitBlendshapeCount>, 3> byBin{};
-    std::array<long, 3> binFrames{};
-    for (const auto& [yaw, a] : neutralFigures.byYaw) {
-        const int bin = std::min(2, static_cast<int>(yaw / 10.f));
-        if (yaw > 30.f) continue;
-        for (int k = 0; k < kArkitBlendshapeCount; ++k)
-            byBin[static_cast<std::size_t>(bin)][static_cast<std::size_t>(k)] += a[static_cast<std::size_t>(k)];
-        ++binFrames[static_cast<std::size_t>(bin)];
+    const YawDrift drift = yawDrift(neutralFigures.byYaw);
+    std::printf(
+        "yaw: neutral frames with |yaw| 0-10 / 10-20 / 20-30 deg: %ld / %ld / %ld; largest change of a shape's mean "
+        "from a clip's 0-10 deg frames %.2f (%s",
+        drift.frames[0], drift.frames[1], drift.frames[2], drift.change, drift.shape.c_str());
+    if (teacherFigures) {
+        const YawDrift t = yawDrift(teacherFigures->byYaw);
+        std::printf("; the teacher's on the same frames %.2f, %s", t.change, t.shape.c_str());
     }
-    double drift = 0;
-    std::string driftShape = "-";
-    for (int k = 0; k < kArkitBlendshapeCount; ++k) {
-        // A turned head's eyes turn back to the camera: the look shapes move by design.
-        if (std::string(arkitNames()[static_cast<std::size_t>(k)]).rfind("eyeLook", 0) == 0) continue;
-        double lo = 1e9, hi = -1e9;
-        for (int b = 0; b < 3; ++b) {
-            if (binFrames[static_cast<std::size_t>(b)] < 10) continue;
-            const double m = byBin[static_cast<std::size_t>(b)][static_cast<std::size_t>(k)] /
-                             static_cast<double>(binFrames[static_cast<std::size_t>(b)]);
-            lo = std::min(lo, m), hi = std::max(hi, m);
-        }
-        if (hi - lo > drift) drift = hi - lo, driftShape = std::string(arkitNames()[static_cast<std::size_t>(k)]);
-    }
-    std::printf("yaw: neutral frames with |yaw| 0-10 / 10-20 / 20-30 deg: %ld / %ld / %ld; largest change of a shape's mean %.2f (%s)\n",
-                binFrames[0], binFrames[1], binFrames[2], drift, driftShape.c_str());
+    std::printf(")\n");
 
     // The targets the per-frame agreement is read against.
     const std::vector<std::string> rTargets = {"jawOpen",     "mouthSmileLeft", "mouthSmileRight", "mouthPucker",    "mouthFunnel",
