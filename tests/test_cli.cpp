@@ -497,7 +497,7 @@ TEST(Cli, LandmarksComeFromThePipelineWithACascadesLandmarkNetAndFromLbfWithLbfO
     const std::string image = test::tempPath("cli_landmarks.png");
     ASSERT_TRUE(cv::imwrite(image, test::clipFrames(1).at(0)));
 
-    const CliRun pipeline = runCli("landmarks '" + image + "' --cascade '" + cascadePath + "'");
+    const CliRun pipeline = runCli("landmarks '" + image + "' --refiner none --cascade '" + cascadePath + "'");
     const CliRun lbf = runCli("landmarks '" + image + "' --cascade '" + cascadePath + "' --lbf-only");
     ASSERT_EQ(pipeline.exit_code, 0) << pipeline.err;
     ASSERT_EQ(lbf.exit_code, 0) << lbf.err;

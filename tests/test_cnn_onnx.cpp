@@ -4,6 +4,7 @@
 // the cascade's file format; the landmark net's geometry; the cnn stage wired into the Tracker;
 // the landmark refiner's geometry and its refine stage.
 
+#include "core/binary_io.hpp"
 #include "core/image.hpp"
 #include "core/pts.hpp"
 #include "expression/landmark_net.hpp"
@@ -113,11 +114,11 @@ std::vector<NamedNet> projectNets() {
         {"side_fixture.onnx", test::fixtureBytes("side_fixture.onnx"), {2, 1, 32, 32}, 2 * 22},
         {"iris_net_fixture.onnx", test::fixtureBytes("iris_net_fixture.onnx"), {2, 1, 28, 40}, 2 * 3 * 14 * 20},
     };
-    if (std::filesystem::exists(CnnModel::defaultPath())) {
-        const std::shared_ptr<const CnnModel> model = CnnModel::load(CnnModel::defaultPath());
-        const nn::CnnModelData& d = model::dataOf(*model);
+    if (std::filesystem::exists(RefinerModel::defaultPath())) {
+        const std::shared_ptr<const RefinerModel> model = RefinerModel::load(RefinerModel::defaultPath());
+        const nn::RefinerModelData& d = model::dataOf(*model);
         const int size = refine::makeRefinerLayout(d).size;
-        nets.push_back({"the shipped landmark refiner", d.refiner_net, {1, 1, size, size}, 136});
+        nets.push_back({"the shipped landmark refiner", d.net, {1, 1, size, size}, 136});
         if (!d.side_net.empty()) {
             const int side = refine::makeSideLayout(d).size;
             nets.push_back({"the shipped brow and eye refiner", d.side_net, {2, 1, side, side}, 2 * 22});
@@ -189,6 +190,49 @@ nn::CnnModelData parityCascade() {
     m.stages.push_back({2, test::fixtureBytes("cnn_parity.onnx")});
     m.provenance = "the export parity fixture";
     return m;
+}
+
+// Versions 4-9 of the CNN file also held the landmark refiner, now a file of its own: a version-9
+// file, written field by field as that version did, reads as its cascade with the refiner skipped.
+TEST(CnnModelFile, ReadsAVersion9FileAndSkipsTheRefinerItHeld) {
+    const nn::CnnModelData m = parityCascade();
+    core::BinaryWriter w;
+    w.put<std::int32_t>(m.patch_size);
+    w.put<std::uint32_t>(1);
+    w.putString(m.expressions[0]);
+    w.put<std::uint32_t>(1);
+    w.put<std::int32_t>(m.stages[0].rounds);
+    w.putString(m.stages[0].onnx);
+    w.putString("");  // no landmark net
+    w.putString(m.provenance);
+    w.put<std::uint8_t>(1);  // expressions only
+    w.put<std::uint32_t>(1);
+    w.put<float>(0.1f);  // neutral
+    w.put<std::uint32_t>(1);
+    w.put<std::uint8_t>(1);  // reported
+    w.putString(test::fixtureBytes("refiner_fixture.onnx"));
+    w.put<std::int32_t>(32);
+    for (int i = 0; i < 136 + 68; ++i) w.put<float>(0.5f);  // mean shape, shares
+    w.put<float>(0.02f);
+    w.put<float>(0.05f);  // trust ramp
+    w.putString(test::fixtureBytes("side_fixture.onnx"));
+    w.put<std::int32_t>(32);
+    for (int i = 0; i < 22 + 11; ++i) w.put<float>(0.5f);
+    w.put<std::uint8_t>(0);  // mirror-averaged
+    w.put<std::uint8_t>(0);  // corrects the fit
+    w.put<std::uint32_t>(1);
+    w.put<float>(0.9f);       // full reading
+    w.put<std::uint32_t>(0);  // no geometry net
+    const std::string path = test::tempPath("cascade_v9.ftm");
+    core::writeModelFile(path, nn::kCnnModelMagic, 9, w.bytes());
+    const nn::CnnModelData back = nn::readCnnModel(path);
+    ASSERT_EQ(back.stages.size(), 1u);
+    EXPECT_EQ(back.stages[0].onnx, m.stages[0].onnx);
+    EXPECT_EQ(back.provenance, m.provenance);
+    EXPECT_TRUE(back.expressions_only);
+    EXPECT_EQ(back.neutral, std::vector<float>{0.1f});
+    EXPECT_EQ(back.full, std::vector<float>{0.9f});
+    EXPECT_EQ(back.reported, std::vector<bool>{true});
 }
 
 TEST(CnnModelFile, RoundTripsAndRejectsDamageAndWrongNets) {
@@ -545,69 +589,59 @@ TEST(CnnStage, TheLandmarkNetMovesTheRefinedFacesProjectedLandmarks) {
     EXPECT_GE(checked, 4);
 }
 
-// The landmark refiner (cnn/landmark_refiner.hpp): a mean shape in a 32 px patch for the fixture net
+// The landmark refiner (refine/landmark_refiner.hpp): a mean shape in a 32 px patch for the fixture net
 // (tests/data/refiner_fixture.onnx: every offset (+3, 0) patch pixels, whatever the patch).
-nn::CnnModelData refinerOnly(float share) {
-    nn::CnnModelData m;
-    m.refiner_net = test::fixtureBytes("refiner_fixture.onnx");
-    m.refiner_patch_size = 32;
+nn::RefinerModelData refinerOnly(float share) {
+    nn::RefinerModelData m;
+    m.net = test::fixtureBytes("refiner_fixture.onnx");
+    m.patch_size = 32;
     for (int i = 0; i < 68; ++i) {  // points on an ellipse inside the patch
         const double a = 2.0 * M_PI * i / 68.0;
-        m.refiner_mean.push_back(static_cast<float>(15.5 + 10.0 * std::cos(a)));
-        m.refiner_mean.push_back(static_cast<float>(16.5 + 12.0 * std::sin(a)));
+        m.mean.push_back(static_cast<float>(15.5 + 10.0 * std::cos(a)));
+        m.mean.push_back(static_cast<float>(16.5 + 12.0 * std::sin(a)));
     }
-    m.refiner_share.assign(68, share);
+    m.share.assign(68, share);
     m.provenance = "the refiner fixture";
     return m;
 }
 
-TEST(CnnModelFile, HoldsALandmarkRefinerAloneOrBesideACascade) {
+TEST(RefinerModelFile, RoundTripsAndRejectsDamage) {
     const std::string path = test::tempPath("refiner.ftm");
-    nn::writeCnnModel(path, refinerOnly(0.6f));
-    const auto alone = CnnModel::load(path);
-    EXPECT_TRUE(alone->hasRefiner());
-    EXPECT_FALSE(alone->hasCascade());
-    EXPECT_EQ(model::dataOf(*alone).refiner_net, refinerOnly(0.6f).refiner_net);
-    EXPECT_EQ(model::dataOf(*alone).refiner_mean, refinerOnly(0.6f).refiner_mean);
-    EXPECT_EQ(model::dataOf(*alone).refiner_share, refinerOnly(0.6f).refiner_share);
-    EXPECT_EQ(model::dataOf(*alone).refiner_trust_to, 0.f);
-    nn::CnnModelData ramped = refinerOnly(0.6f);
-    ramped.refiner_trust_from = 0.03f, ramped.refiner_trust_to = 0.045f;
-    nn::writeCnnModel(path, ramped);
-    EXPECT_EQ(model::dataOf(*CnnModel::load(path)).refiner_trust_from, 0.03f);
-    EXPECT_EQ(model::dataOf(*CnnModel::load(path)).refiner_trust_to, 0.045f);
-    ramped.refiner_trust_to = 2.f;  // a disagreement of twice the face's size: corrupt
-    EXPECT_THROW(nn::writeCnnModel(path, ramped), Error);
-    nn::CnnModelData both = parityCascade();
-    const nn::CnnModelData refiner = refinerOnly(0.6f);
-    both.refiner_net = refiner.refiner_net;
-    both.refiner_patch_size = refiner.refiner_patch_size;
-    both.refiner_mean = refiner.refiner_mean;
-    both.refiner_share = refiner.refiner_share;
-    nn::writeCnnModel(path, both);
-    EXPECT_TRUE(CnnModel::load(path)->hasRefiner());
-    EXPECT_TRUE(CnnModel::load(path)->hasCascade());
-    nn::writeCnnModel(path, parityCascade());
-    EXPECT_FALSE(CnnModel::load(path)->hasRefiner());
+    nn::writeRefinerModel(path, refinerOnly(0.6f));
+    const auto loaded = RefinerModel::load(path);
+    EXPECT_FALSE(loaded->hasSideNet());
+    EXPECT_EQ(loaded->provenance(), "the refiner fixture");
+    EXPECT_EQ(model::dataOf(*loaded).net, refinerOnly(0.6f).net);
+    EXPECT_EQ(model::dataOf(*loaded).mean, refinerOnly(0.6f).mean);
+    EXPECT_EQ(model::dataOf(*loaded).share, refinerOnly(0.6f).share);
+    EXPECT_EQ(model::dataOf(*loaded).trust_to, 0.f);
+    nn::RefinerModelData ramped = refinerOnly(0.6f);
+    ramped.trust_from = 0.03f, ramped.trust_to = 0.045f;
+    nn::writeRefinerModel(path, ramped);
+    EXPECT_EQ(model::dataOf(*RefinerModel::load(path)).trust_from, 0.03f);
+    EXPECT_EQ(model::dataOf(*RefinerModel::load(path)).trust_to, 0.045f);
+    ramped.trust_to = 2.f;  // a disagreement of twice the face's size: corrupt
+    EXPECT_THROW(nn::writeRefinerModel(path, ramped), Error);
+    // A CNN file is not a refiner, nor the other way round.
+    nn::writeCnnModel(test::tempPath("not_a_refiner.ftm"), parityCascade());
+    EXPECT_THROW(RefinerModel::load(test::tempPath("not_a_refiner.ftm")), Error);
+    EXPECT_THROW(CnnModel::load(path), Error);
 
-    nn::CnnModelData bad = refinerOnly(1.5f);  // a share outside [0, 1]
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
+    nn::RefinerModelData bad = refinerOnly(1.5f);  // a share outside [0, 1]
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
     bad = refinerOnly(0.5f);
-    bad.refiner_mean.pop_back();
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
+    bad.mean.pop_back();
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
     bad = refinerOnly(0.5f);
-    bad.refiner_mean[0] = 40.f;  // outside the 32 px patch
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
+    bad.mean[0] = 40.f;  // outside the 32 px patch
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
     bad = refinerOnly(0.5f);
-    bad.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");  // it refines a cascade's face: needs stages
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
-    bad = refinerOnly(0.5f);
-    bad.mirror_averaged = true;  // no stage to average
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
+    bad.net.clear();
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
 }
 
 TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
-    const nn::CnnModelData m = refinerOnly(1.f);
+    const nn::RefinerModelData m = refinerOnly(1.f);
     refine::RefinerLayout layout = refine::makeRefinerLayout(m);
     // LBF's points: the mean shape scaled 1.5x, turned 10 degrees and moved.
     core::Similarity placed;
@@ -655,11 +689,11 @@ TEST(LandmarkRefiner, ThePatchIsTheFrameAtTheSimilarityAndTheOffsetsMapBack) {
 TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrustsTheNet) {
     // The fixture moves every point by (+3, 0) patch pixels, so the net and LBF disagree alike on
     // every frame; a ramp below that disagreement trusts the net alone on any one frame (g = 1).
-    nn::CnnModelData m = refinerOnly(0.25f);
-    m.refiner_trust_from = 0.f, m.refiner_trust_to = 1e-4f;
+    nn::RefinerModelData m = refinerOnly(0.25f);
+    m.trust_from = 0.f, m.trust_to = 1e-4f;
     const std::string path = test::tempPath("refiner_trust.ftm");
-    nn::writeCnnModel(path, m);
-    const auto stage = refine::makeRefineStage(CnnModel::load(path));
+    nn::writeRefinerModel(path, m);
+    const auto stage = refine::makeRefineStage(RefinerModel::load(path));
     ASSERT_TRUE(stage->info().available) << stage->info().detail;
     const auto state = stage->newFaceState();
     const cv::Mat gray(160, 160, CV_8U, cv::Scalar(128));
@@ -688,9 +722,9 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrus
     EXPECT_NEAR(shareOfTheNet(true), twoRounds(1.f), 1e-3f);  // a face found again: this frame's alone
 
     // A ramp beyond the disagreement (g = 0): one round, the net's share alone.
-    m.refiner_trust_from = 0.5f, m.refiner_trust_to = 0.6f;
-    nn::writeCnnModel(path, m);
-    const auto untrusting = refine::makeRefineStage(CnnModel::load(path));
+    m.trust_from = 0.5f, m.trust_to = 0.6f;
+    nn::writeRefinerModel(path, m);
+    const auto untrusting = refine::makeRefineStage(RefinerModel::load(path));
     pipeline::FaceTrack face;
     face.fresh = true;
     face.result.landmarks = core::toLandmarks68(lbf);
@@ -700,8 +734,8 @@ TEST(RefineStage, AveragesTheTrustOverAFollowedFacesFramesAndRealignsWhereItTrus
 
 // The brow and eye refiner (landmark_refiner.hpp, one side at a time): a mean shape of one side in a
 // 32 px patch for the fixture net (tests/data/side_fixture.onnx: every offset (+3, 0) patch pixels).
-nn::CnnModelData withSides(float share) {
-    nn::CnnModelData m = refinerOnly(0.f);
+nn::RefinerModelData withSides(float share) {
+    nn::RefinerModelData m = refinerOnly(0.f);
     m.side_net = test::fixtureBytes("side_fixture.onnx");
     m.side_patch_size = 32;
     for (int i = 0; i < 11; ++i) {  // a brow above an eye, both inside the patch
@@ -712,27 +746,28 @@ nn::CnnModelData withSides(float share) {
     return m;
 }
 
-TEST(CnnModelFile, HoldsABrowAndEyeRefinerBesideTheLandmarkRefiner) {
+TEST(RefinerModelFile, HoldsABrowAndEyeRefinerBesideTheLandmarkRefiner) {
     const std::string path = test::tempPath("sides.ftm");
-    nn::writeCnnModel(path, withSides(0.5f));
-    const auto loaded = CnnModel::load(path);
+    nn::writeRefinerModel(path, withSides(0.5f));
+    const auto loaded = RefinerModel::load(path);
+    EXPECT_TRUE(loaded->hasSideNet());
     EXPECT_EQ(model::dataOf(*loaded).side_net, withSides(0.5f).side_net);
     EXPECT_EQ(model::dataOf(*loaded).side_mean, withSides(0.5f).side_mean);
     EXPECT_EQ(model::dataOf(*loaded).side_share, withSides(0.5f).side_share);
-    nn::writeCnnModel(path, refinerOnly(0.5f));
-    EXPECT_TRUE(model::dataOf(*CnnModel::load(path)).side_net.empty());
+    nn::writeRefinerModel(path, refinerOnly(0.5f));
+    EXPECT_TRUE(model::dataOf(*RefinerModel::load(path)).side_net.empty());
 
-    nn::CnnModelData bad = withSides(0.5f);  // it refines the landmark refiner's answer: needs it
-    bad.refiner_net.clear();
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
-    bad = withSides(1.5f);
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
+    nn::RefinerModelData bad = withSides(1.5f);
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
     bad = withSides(0.5f);
     bad.side_mean.pop_back();
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
     bad = withSides(0.5f);
     bad.side_mean[0] = 40.f;  // outside the 32 px patch
-    EXPECT_THROW(nn::writeCnnModel(path, bad), Error);
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
+    bad = refinerOnly(0.5f);
+    bad.side_share.assign(11, 0.5f);  // a shape without its net
+    EXPECT_THROW(nn::writeRefinerModel(path, bad), Error);
 }
 
 TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
@@ -794,8 +829,8 @@ TEST(LandmarkRefiner, TheLeftSideIsReadMirroredIntoTheRightSidesLayout) {
 
 TEST(RefineStage, TheBrowAndEyeRefinerMovesOnlyTheBrowsAndEyesByItsShare) {
     const std::string path = test::tempPath("refiner_sides.ftm");
-    nn::writeCnnModel(path, withSides(0.5f));  // the landmark refiner's share is 0: it keeps LBF's points
-    const auto stage = refine::makeRefineStage(CnnModel::load(path));
+    nn::writeRefinerModel(path, withSides(0.5f));  // the landmark refiner's share is 0: it keeps LBF's points
+    const auto stage = refine::makeRefineStage(RefinerModel::load(path));
     ASSERT_TRUE(stage->info().available) << stage->info().detail;
     EXPECT_NE(stage->info().detail.find("brows and eyes"), std::string::npos) << stage->info().detail;
     const cv::Mat gray(160, 160, CV_8U, cv::Scalar(128));
@@ -839,17 +874,18 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     Models plain = Models::loadDefault();
     plain.eyes = nullptr;
     plain.cnn = nullptr;
+    plain.refiner = nullptr;
     // A face for a mean shape (LBF's, 22 px wide in the patch), so that the fit after the stage still
     // holds the face: the answer is a quarter of the way from LBF's points to the net's.
-    nn::CnnModelData m = refinerOnly(0.25f);
+    nn::RefinerModelData m = refinerOnly(0.25f);
     const core::Shape68& lbfMean = model::dataOf(*plain.landmarks).mean_shape;
     const float width = lbfMean.row(0).maxCoeff() - lbfMean.row(0).minCoeff();
     const core::Shape68 mean = ((lbfMean.colwise() - lbfMean.rowwise().mean()) * (22.f / width)).colwise() + Eigen::Vector2f(15.5f, 16.f);
-    m.refiner_mean.assign(mean.data(), mean.data() + 136);
+    m.mean.assign(mean.data(), mean.data() + 136);
     const std::string path = test::tempPath("refiner_stage.ftm");
-    nn::writeCnnModel(path, m);
+    nn::writeRefinerModel(path, m);
     Models refined = plain;
-    refined.cnn = CnnModel::load(path);
+    refined.refiner = RefinerModel::load(path);
     TrackerConfig config;
     config.filter.enabled = false;
     Tracker reference(plain, config), tracker(refined, config);
@@ -860,7 +896,7 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
     EXPECT_TRUE(find("refine").available) << find("refine").detail;
     EXPECT_NE(find("refine").detail.find("nets on the own kernels"), std::string::npos) << find("refine").detail;
     EXPECT_FALSE(find("cnn").available);
-    EXPECT_NE(find("cnn").detail.find("has no cascade stages"), std::string::npos) << find("cnn").detail;
+    EXPECT_NE(find("cnn").detail.find("no CNN file given"), std::string::npos) << find("cnn").detail;
 
     const refine::RefinerLayout layout = refine::makeRefinerLayout(m);
     FrameResult lbfOut, out;
@@ -892,13 +928,13 @@ TEST(RefineStage, MovesLbfsLandmarksBeforeTheFit) {
 // (docs/cnn.md: 3.53 -> 3.43 % over the whole common test set; from the tracker's 3 starts, 4.76 -> 4.53 % on these 55).
 TEST(ShippedRefiner, MovesLbfsLandmarksCloserToTheAnnotation) {
     FACETRACK_REQUIRE_SHARED();
-    const std::string path = test::sourceDir() + "/models/cnn_cascade.ftm";
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << "models/cnn_cascade.ftm is not shipped";
-    const auto model = CnnModel::load(path);
-    ASSERT_TRUE(model->hasRefiner());
-    const nn::CnnModelData& d = model::dataOf(*model);
+    const std::string path = test::sourceDir() + "/models/landmark_refiner.ftm";
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "models/landmark_refiner.ftm is not shipped";
+    const auto model = RefinerModel::load(path);
+    ASSERT_TRUE(model->hasSideNet());
+    const nn::RefinerModelData& d = model::dataOf(*model);
     const refine::RefinerLayout layout = refine::makeRefinerLayout(d);
-    nn::PatchNet net(d.refiner_net, layout.size, 136, "the shipped refiner");
+    nn::PatchNet net(d.net, layout.size, 136, "the shipped refiner");
     const auto lbf = LandmarkModel::loadDefault();
     DetectorConfig config;
     config.kind = DetectorKind::YuNet;

@@ -469,7 +469,7 @@ TEST(CalibrationStage, AppliesTheCalibrationAndCapturesTheNeutralItWasGiven) {
 }
 
 TEST(TrackerApi, TakesTheApplicationsOwnDetector) {
-    Models models{FaceModel::load(test::shippedFaceModel()), nullptr, nullptr, nullptr};
+    Models models{FaceModel::load(test::shippedFaceModel()), nullptr, nullptr, nullptr, nullptr};
     int calls = 0;
     Tracker tracker(models, {}, std::make_unique<FakeDetector>(&calls));
     EXPECT_EQ(tracker.stages()[0].detail.rfind("fake (none)", 0), 0u) << tracker.stages()[0].detail;

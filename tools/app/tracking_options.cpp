@@ -46,6 +46,10 @@ TrackerConfig trackerConfig(const Args& args) {
 
 Models trackingModels(const Args& args) {
     Models models = Models::loadDefault();
+    if (args.has("--refiner")) {
+        const std::string refiner = args.get("--refiner");
+        models.refiner = refiner == "none" ? nullptr : RefinerModel::load(refiner);
+    }
     if (args.has("--cnn")) {
         const std::string cnn = args.get("--cnn");
         models.cnn = cnn == "none" ? nullptr : CnnModel::load(cnn);

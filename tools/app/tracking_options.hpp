@@ -17,18 +17,27 @@ inline const std::set<std::string> kDetectorOptions = {"--detector", "--yunet", 
 DetectorConfig detectorConfig(const Args& args);
 
 /// --max-faces N, --fov DEG, --focal PX, --calibration-frames N, --expression-prior F,
-/// --landmark-starts N, --filter-cutoff HZ, --filter-beta B, --cnn FILE|none, --eyes FILE|none, and the flags --no-filter,
+/// --landmark-starts N, --filter-cutoff HZ, --filter-beta B, --refiner FILE|none, --cnn FILE|none, --eyes FILE|none, and
+/// the flags --no-filter,
 /// --no-cnn-stage.
-inline const std::set<std::string> kTrackerOptions = {
-    "--max-faces",   "--fov", "--focal", "--calibration-frames", "--expression-prior", "--landmark-starts", "--filter-cutoff",
-    "--filter-beta", "--cnn", "--eyes"};
+inline const std::set<std::string> kTrackerOptions = {"--max-faces",
+                                                      "--fov",
+                                                      "--focal",
+                                                      "--calibration-frames",
+                                                      "--expression-prior",
+                                                      "--landmark-starts",
+                                                      "--filter-cutoff",
+                                                      "--filter-beta",
+                                                      "--refiner",
+                                                      "--cnn",
+                                                      "--eyes"};
 inline const std::set<std::string> kTrackerFlags = {"--no-filter", "--no-cnn-stage"};
 /// Every value is checked here (facetrack::validate): commands call it, and load their models,
 /// before they open any input, so that a bad option is the error, not the input.
 TrackerConfig trackerConfig(const Args& args);
 
-/// The shipped models (Models::loadDefault), the CNN cascade replaced by --cnn FILE, or left
-/// out with --cnn none; the eye model likewise by --eyes FILE|none.
+/// The shipped models (Models::loadDefault), the landmark refiner replaced by --refiner FILE, or
+/// left out with --refiner none; the CNN file and the eye model likewise by --cnn and --eyes.
 Models trackingModels(const Args& args);
 
 /// --profile FILE|none, for the commands a user tracks themself with (track, send, the demo):

@@ -38,17 +38,18 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage = R"(usage: facetrack eval-landmarks DIR [--split train|validation|test] [--model FILE]
-                                [--cascade FILE] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
+                                [--refiner FILE|none] [--cascade FILE|none] [--lbf-only] [--facemark FILE] [--dlib FILE|none]
                                 [--plot ced.png] [--max-error 0.08] [--landmark-starts N]
                                 [--tracked-frames N] [--points-out FILE.csv] [--sequences] [--poses FILE]
 Fits 68 landmarks on every face below DIR that has a .pts file, starting from its
 YuNet box, and compares them with the annotation. With --split, DIR is the 300-W
 root (../shared/data/faces300w) and only that split is read (docs/landmarks.md).
 Methods, side by side with the same boxes:
-  facetrack LBF + refiner  what the tracker reports: LBF, the CNN landmark refiner, the fit, and
-                           a CNN cascade's landmark net (--cascade, default: the shipped
-                           cnn_cascade.ftm, which has the refiner alone; --lbf-only leaves them
-                           out); a face whose fit does not hold keeps LBF's landmarks ("dropped")
+  facetrack LBF + refiner  what the tracker reports: LBF, the CNN landmark refiner (--refiner,
+                           default: the shipped landmark_refiner.ftm), the fit, and a CNN file's
+                           landmark net (--cascade; the shipped cnn_cascade.ftm has none);
+                           --lbf-only leaves them out; a face whose fit does not hold keeps
+                           LBF's landmarks ("dropped")
   facetrack LBF, N starts  --model (default: the shipped landmarks_lbf.ftm) from --landmark-starts N
                            starts, averaged (default 3, the tracker's), and from one start
   facetrack tracked        --tracked-frames N: the tracker (LBF + fit, no CNN, no filter) given the
@@ -139,7 +140,7 @@ Method trackedStill(std::shared_ptr<const LandmarkModel> model, int starts, int 
     config.filter.enabled = false;
     config.max_faces = 1;
     config.landmark_starts = starts;
-    auto tracker = std::make_shared<Tracker>(Models{FaceModel::loadDefault(), model, nullptr, nullptr}, config);
+    auto tracker = std::make_shared<Tracker>(Models{FaceModel::loadDefault(), model, nullptr, nullptr, nullptr}, config);
     auto result = std::make_shared<FrameResult>();
     return {"facetrack tracked, frame " + std::to_string(frames),
             [model, starts, frames, tracker, result, &dropped](const cv::Mat& bgr, const cv::Mat& gray, const Box& box) {
@@ -255,8 +256,8 @@ void writePointsRow(std::ofstream& out, const std::string& image, const std::str
 
 int runEvalLandmarks(const std::vector<std::string>& argv) {
     const Args args(argv,
-                    {"--split", "--model", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet", "--landmark-starts",
-                     "--tracked-frames", "--points-out", "--poses"},
+                    {"--split", "--model", "--refiner", "--cascade", "--facemark", "--dlib", "--plot", "--max-error", "--yunet",
+                     "--landmark-starts", "--tracked-frames", "--points-out", "--poses"},
                     {"--help", "--lbf-only", "--sequences"});
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -274,7 +275,8 @@ int runEvalLandmarks(const std::vector<std::string>& argv) {
     const auto lbf = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
     const int starts = args.integer("--landmark-starts", TrackerConfig{}.landmark_starts);
     landmarks::checkStartCount(starts, "--landmark-starts");
-    auto pipeline = std::make_shared<StillLandmarks>(lbf, args.get("--cascade", ""), args.has("--lbf-only"), "yunet", starts);
+    auto pipeline = std::make_shared<StillLandmarks>(lbf, args.get("--refiner", ""), args.get("--cascade", ""), args.has("--lbf-only"),
+                                                     "yunet", starts);
     int dropped = 0;
     if (pipeline->usesPipeline()) {
         methods.emplace_back(pipeline->method(), [pipeline, &dropped](const cv::Mat& bgr, const cv::Mat& gray, const Box& box) {

@@ -16,14 +16,14 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage = R"(usage: facetrack landmarks IMAGE|DIR|CLIP [--box x0,y0,x1,y1] [--model FILE]
-                           [--cascade FILE] [--lbf-only]
+                           [--refiner FILE|none] [--cascade FILE|none] [--lbf-only]
                            [--detector auto|yunet|cascade] [--yunet PATH] [--min-score S]
 68 landmarks (iBUG order, 0-based pixels) for each face, one JSON line per image or frame:
   {"image": PATH, "frame": N, "method": M, "faces": [{"box": [x0,y0,x1,y1], "score": s, "landmarks": [[x,y], ...]}]}
-Each image or frame on its own. The landmarks are the tracker's: LBF, the CNN landmark refiner,
-the fit, the CNN cascade and its landmark net (--cascade, default: the shipped cnn_cascade.ftm,
-which has the refiner alone), or LBF's alone with --lbf-only or without such nets, and for a face
-whose fit does not hold; "method" says which.
+Each image or frame on its own. The landmarks are the tracker's: LBF, the CNN landmark refiner
+(--refiner, default: the shipped landmark_refiner.ftm), the fit and a CNN file's landmark net
+(--cascade; the shipped cnn_cascade.ftm has none), or LBF's alone with --lbf-only or without such
+nets, and for a face whose fit does not hold; "method" says which.
 --box skips detection and starts from that box (drawn like YuNet's; score is null).
 --model defaults to landmarks_lbf.ftm in the model directory.)";
 
@@ -50,7 +50,7 @@ Box parseBox(const std::string& text) {
 
 int runLandmarks(const std::vector<std::string>& argv) {
     auto valued = kDetectorOptions;
-    valued.insert({"--box", "--model", "--cascade"});
+    valued.insert({"--box", "--model", "--refiner", "--cascade"});
     const Args args(argv, valued, {"--help", "--lbf-only"});
     if (args.has("--help")) {
         std::puts(kUsage);
@@ -61,7 +61,8 @@ int runLandmarks(const std::vector<std::string>& argv) {
     const auto model = args.has("--model") ? LandmarkModel::load(args.get("--model")) : LandmarkModel::loadDefault();
     std::unique_ptr<FaceDetector> detector;
     if (!givenBox) detector = createFaceDetector(detectorConfig(args));
-    StillLandmarks still(model, args.get("--cascade", ""), args.has("--lbf-only"), detector ? detector->kind() : "yunet");
+    StillLandmarks still(model, args.get("--refiner", ""), args.get("--cascade", ""), args.has("--lbf-only"),
+                         detector ? detector->kind() : "yunet");
     auto reader = MediaReader::open(args.positional()[0]);
 
     MediaFrame frame;

@@ -38,8 +38,8 @@ temporal filtering. docs/api.md gives the axis conventions.
 Tracker options: --max-faces N, --fov DEG (default 60), --focal PX, --calibration-frames N (0: mean face),
   --expression-prior F (factor on the fit's learned expression prior, default 1; below 1 expressions
   respond more), --landmark-starts N (landmark passes averaged, 1..9, default 3), --no-filter,
-  --filter-cutoff HZ, --filter-beta B, --cnn FILE|none (CNN cascade), --no-cnn-stage (the CNN file's
-  refiners only: no expressions read from the texture, ~0.3 ms less a frame), --eyes FILE|none (eye model),
+  --filter-cutoff HZ, --filter-beta B, --refiner FILE|none (landmark refiner), --cnn FILE|none (CNN file),
+  --no-cnn-stage (no expressions read from the texture, ~0.3 ms less a frame), --eyes FILE|none (eye model),
   and the detector options.
 With no input: the first webcam, else a clip from ../shared/data/clips.)";
 

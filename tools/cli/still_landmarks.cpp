@@ -8,8 +8,21 @@
 
 namespace facetrack::cli {
 
-StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
-                               const std::string& boxPrior, int starts)
+namespace {
+
+/// The model at `given`, none for "none", or the shipped one at `shipped` when `given` is "" and it exists.
+template <class Model>
+std::shared_ptr<const Model> givenOrShipped(const std::string& given, const std::string& shipped) {
+    if (given == "none") return nullptr;
+    std::error_code ec;
+    if (given.empty() && !std::filesystem::exists(shipped, ec)) return nullptr;
+    return Model::load(given.empty() ? shipped : given);
+}
+
+}  // namespace
+
+StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& refinerPath, const std::string& cascadePath,
+                               bool lbfOnly, const std::string& boxPrior, int starts)
     : lbf_(std::move(lbf)), method_("facetrack LBF"), box_prior_(boxPrior), starts_(starts) {
     config_.filter.enabled = false;
     config_.max_faces = 1;
@@ -17,18 +30,15 @@ StillLandmarks::StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const s
     config_.detector.kind = boxPrior == "cascade" ? DetectorKind::Cascade : DetectorKind::YuNet;  // its kind picks LBF's box prior
     models_.landmarks = lbf_;
     if (lbfOnly) return;
-    std::error_code ec;
-    const std::string path = cascadePath.empty() ? CnnModel::defaultPath() : cascadePath;
-    if (cascadePath.empty() && !std::filesystem::exists(path, ec)) return;
-    auto cascade = CnnModel::load(path);
-    if (!cascade->hasLandmarkNet() && !cascade->hasRefiner()) {
-        if (!cascadePath.empty()) throw Error("CNN file '" + path + "' has neither a landmark net nor a landmark refiner");
-        return;
+    models_.refiner = givenOrShipped<RefinerModel>(refinerPath, RefinerModel::defaultPath());
+    models_.cnn = givenOrShipped<CnnModel>(cascadePath, CnnModel::defaultPath());
+    if (models_.cnn && !models_.cnn->hasLandmarkNet()) {
+        if (!cascadePath.empty()) throw Error("CNN file '" + cascadePath + "' has no landmark net");
+        models_.cnn = nullptr;  // the shipped one reads expressions only: the landmarks are the refiner's
     }
-    method_ = std::string("facetrack LBF") + (cascade->hasRefiner() ? " + refiner" : "") +
-              (cascade->hasLandmarkNet() ? " + fit + CNN" : "");
+    if (!models_.refiner && !models_.cnn) return;
+    method_ += std::string(models_.refiner ? " + refiner" : "") + (models_.cnn ? " + fit + CNN" : "");
     models_.face = FaceModel::loadDefault();
-    models_.cnn = std::move(cascade);
     tracker_ = std::make_unique<Tracker>(models_, config_);
 }
 

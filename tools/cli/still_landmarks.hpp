@@ -15,11 +15,12 @@ namespace facetrack::cli {
 
 class StillLandmarks {
 public:
-    /// `cascadePath`: a CNN file, or "" for the shipped one when it exists.
-    /// `lbfOnly`, or a file with neither a landmark net nor a refiner: LBF alone.
+    /// `refinerPath`: a landmark refiner, "" for the shipped one when it exists, or "none".
+    /// `cascadePath`: a CNN file with a landmark net, "" for the shipped one when it has one, or
+    /// "none"; a given file without one is an Error. `lbfOnly`, or neither: LBF alone.
     /// `boxPrior`: the detector whose boxes are given, "yunet" or "cascade".
     /// `starts`: LBF from that many starts, averaged (TrackerConfig::landmark_starts).
-    StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& cascadePath, bool lbfOnly,
+    StillLandmarks(std::shared_ptr<const LandmarkModel> lbf, const std::string& refinerPath, const std::string& cascadePath, bool lbfOnly,
                    const std::string& boxPrior = "yunet", int starts = TrackerConfig{}.landmark_starts);
 
     /// What the landmarks are: "facetrack LBF", with " + refiner" and " + fit + CNN" for the nets that move them.

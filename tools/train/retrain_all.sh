@@ -63,21 +63,21 @@ run_step() {
     refine)
       "${py[@]}" tools.train.refine.train_refine --minutes 55 --profiled build/profiled --out build/refine/lp
       "${py[@]}" tools.train.refine.train_refine --out build/refine/lp --profiled build/profiled --export --evaluate validation
-      $bin/pack_cnn --refiner build/refine/lp.onnx --out $models/cnn_cascade.ftm --provenance "tools/train/retrain_all.sh: refiner" ;;
+      $bin/pack_refiner --refiner build/refine/lp.onnx --out $models/landmark_refiner.ftm --provenance "tools/train/retrain_all.sh: refiner" ;;
     sides)
       # The pipeline's points with the new refiner, then the side net trained on them.
       for s in train validation test; do
-        $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --cascade $models/cnn_cascade.ftm --dlib none \
+        $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --refiner $models/landmark_refiner.ftm --dlib none \
           --points-out build/region/points_$s.csv
       done
       for s in train validation; do
-        $bin/facetrack eval-landmarks build/profiled/$s --cascade $models/cnn_cascade.ftm --dlib none \
+        $bin/facetrack eval-landmarks build/profiled/$s --refiner $models/landmark_refiner.ftm --dlib none \
           --points-out build/region/profiled_points_$s.csv
       done
       local net=(--out build/region/c8 --widths 8,16,32,64 --strides 2,2,2,2 --hidden 128 --profiled build/profiled)
       "${py[@]}" tools.train.refine.train_region "${net[@]}" --minutes 20
       "${py[@]}" tools.train.refine.train_region "${net[@]}" --evaluate validation --brows-only --export
-      $bin/pack_cnn --base $models/cnn_cascade.ftm --sides build/region/c8.onnx --out $models/cnn_cascade.ftm \
+      $bin/pack_refiner --base $models/landmark_refiner.ftm --sides build/region/c8.onnx --out $models/landmark_refiner.ftm \
         --provenance "tools/train/retrain_all.sh: refiner, sides" ;;
     expression)
       $bin/make_cnn_samples --starts-from fit --max-start-deg 25 --perturb 6 --clip-perturb 3 --rotation-deg 5 --yaw-deg 6 \
@@ -96,10 +96,10 @@ run_step() {
       done
       "${py[@]}" tools.train.expression.train_geometry --tracked build/tracked --tracked-crops build/tracked_300w \
         --net build/cnn/v2 --out build/cnn/geometry
-      $bin/pack_cnn --base $models/cnn_cascade.ftm --nets build/cnn/v2.onnx --expressions-only --rest-from-validation \
+      $bin/pack_cnn --nets build/cnn/v2.onnx --expressions-only --rest-from-validation \
         --gain-from-validation --mirror-average --min-validation-r 0.1 --leave-out cheekSquint_L,cheekSquint_R,noseSneer_L,noseSneer_R \
         --corrects-fit --geometry build/cnn/geometry --out $models/cnn_cascade.ftm \
-        --provenance "tools/train/retrain_all.sh: refiner, sides, expressions" ;;
+        --provenance "tools/train/retrain_all.sh: expressions" ;;
     *) echo "retrain_all: no step '$name'" >&2; return 2 ;;
   esac
 }

@@ -4,10 +4,8 @@
 /// from the face texture warped into a canonical patch at the current pose and
 /// expression, the update to both, and optionally a last net that moves the
 /// 68 landmarks from where the refined face projects them. Trained by tools/train/expression on the dense
-/// teacher labels (MediaPipe's mesh fitted with the face model; docs/cnn.md).
-/// A file may also hold, or hold only, the landmark refiner of the "refine" stage: a net that
-/// reads the face aligned by LBF's landmarks and moves them, before the fit (tools/train/refine),
-/// with or without a second net that then refines the brows and eyes, one side at a time.
+/// teacher labels (MediaPipe's mesh fitted with the face model; docs/cnn.md), with a net that
+/// reads the expressions from the landmarks' geometry beside them.
 ///
 /// Like the other models it is data: load it once, it is immutable, share it
 /// (by shared_ptr) between any number of Trackers on any threads.
@@ -40,10 +38,6 @@ public:
     const std::string& provenance() const;
     /// Per stage, how many rounds it runs.
     std::vector<int> rounds() const;
-    /// Whether it has pose and expression stages: the "cnn" stage runs only then.
-    bool hasCascade() const;
-    /// Whether it has the landmark refiner: the "refine" stage runs only then.
-    bool hasRefiner() const;
     /// Whether it has the landmark net: the stage then reports its landmarks.
     bool hasLandmarkNet() const;
     /// Whether its nets read only the expressions: the stage then keeps the fit's

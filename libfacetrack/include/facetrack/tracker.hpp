@@ -17,6 +17,7 @@
 #include "facetrack/face_model.hpp"
 #include "facetrack/image.hpp"
 #include "facetrack/landmark_model.hpp"
+#include "facetrack/refiner_model.hpp"
 #include "facetrack/result.hpp"
 
 #include <memory>
@@ -32,9 +33,10 @@ struct Models {
     std::shared_ptr<const LandmarkModel> landmarks;  ///< null: the landmarks stage is not available
     std::shared_ptr<const EyeModel> eyes;            ///< null: the gaze stage is not available
     std::shared_ptr<const CnnModel> cnn;             ///< null: the cnn stage is not available
+    std::shared_ptr<const RefinerModel> refiner;     ///< null: the refine stage is not available
 
-    /// The shipped models from modelDirectory(). A missing landmark, eye or
-    /// CNN model leaves its pointer null (and is logged); any other problem throws Error.
+    /// The shipped models from modelDirectory(). A missing landmark, refiner, eye
+    /// or CNN model leaves its pointer null (and is logged); any other problem throws Error.
     static Models loadDefault();
 };
 
@@ -91,13 +93,12 @@ struct TrackerConfig {
     /// and averages them, 1..9: each start costs one more landmark pass (about
     /// 0.2 ms on one core), and five jitter about half as much as one
     /// (docs/landmarks.md). Three, because the landmark refiner after them
-    /// steadies the points too; without the CNN file five jitter less.
+    /// steadies the points too; without the refiner five jitter less.
     int landmark_starts = 3;
-    /// Run the CNN file's cascade stages (the "cnn" stage). The shipped file's
+    /// Run the CNN file's expression nets (the "cnn" stage). The shipped file
     /// reads 32 ARKit shapes from the face's texture and the landmarks' geometry
     /// and corrects the fit's (the brows, pucker, squint, press; docs/cnn.md) in
-    /// about 0.25 ms a frame on one core; false leaves the fit's 15 and the
-    /// file's refiners only.
+    /// about 0.25 ms a frame on one core; false leaves the fit's 15.
     bool cnn_stage = true;
 };
 

@@ -199,7 +199,6 @@ std::unique_ptr<pipeline::Stage> makeCnnStage(std::shared_ptr<const CnnModel> ca
         return pipeline::notAvailable("cnn",
                                       "no CNN file given (Models::loadDefault() reads " + CnnModel::defaultPath() + " when it exists)");
     }
-    if (!cascade->hasCascade()) return pipeline::notAvailable("cnn", "'" + cascade->sourcePath() + "' has no cascade stages");
     return std::make_unique<CnnStage>(std::move(cascade), std::move(face));
 }
 

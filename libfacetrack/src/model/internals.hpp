@@ -1,6 +1,6 @@
 #pragma once
 // The data behind the public model classes (FaceModel, LandmarkModel,
-// EyeModel, CnnModel), for facetrack's own stages and tools. The public
+// RefinerModel, EyeModel, CnnModel), for facetrack's own stages and tools. The public
 // headers name no internal type but the pointers they hold and this friend.
 // Every model is made here, from the data its reader returns: one way to
 // turn a file into a shared, immutable model.
@@ -9,6 +9,7 @@
 #include "facetrack/eye_model.hpp"
 #include "facetrack/face_model.hpp"
 #include "facetrack/landmark_model.hpp"
+#include "facetrack/refiner_model.hpp"
 
 #include <memory>
 #include <string>
@@ -23,6 +24,7 @@ struct Internals {
     static const landmarks::LbfModel& data(const LandmarkModel& m) { return *m.data_; }
     static const gaze::EyeModelData& data(const EyeModel& m) { return *m.data_; }
     static const nn::CnnModelData& data(const CnnModel& m) { return *m.data_; }
+    static const nn::RefinerModelData& data(const RefinerModel& m) { return *m.data_; }
 
     /// The model of `data` (a reader's result, or data a tool built), read from
     /// `source`; `Data` picks the model class.
@@ -53,6 +55,10 @@ struct Internals::ModelOf<gaze::EyeModelData> {
 template <>
 struct Internals::ModelOf<nn::CnnModelData> {
     using type = CnnModel;
+};
+template <>
+struct Internals::ModelOf<nn::RefinerModelData> {
+    using type = RefinerModel;
 };
 
 /// The data behind a model: dataOf(*face), dataOf(*cascade), ...

@@ -21,7 +21,6 @@ void validateGeometry(const CnnModelData& m, const std::string& what) {
             throw Error(what + ": corrupt: geometry readings without the geometry net");
         return;
     }
-    if (m.stages.empty()) throw Error(what + ": corrupt: a geometry net without cascade stages");
     int inputs = kGeometryFeatures;
     for (const DenseLayer& l : m.geometry_net) {
         if (l.cols != inputs || l.rows < 1 || l.rows > 4096 || l.weight.size() != static_cast<std::size_t>(l.rows) * l.cols ||
@@ -47,33 +46,7 @@ void validateGeometry(const CnnModelData& m, const std::string& what) {
 
 void validate(const CnnModelData& m, const std::string& what) {
     if (m.patch_size < 16 || m.patch_size > 256) throw Error(what + ": corrupt: patch size");
-    const bool refiner = !m.refiner_net.empty();
-    if ((m.stages.empty() && !refiner) || m.stages.size() > kMaxStages) throw Error(what + ": corrupt: stage count");
-    if (m.stages.empty() && !m.landmark_net.empty()) throw Error(what + ": corrupt: a landmark net without stages");
-    if (refiner) {
-        if (m.refiner_patch_size < 16 || m.refiner_patch_size > 256) throw Error(what + ": corrupt: refiner patch size");
-        if (m.refiner_mean.size() != 136 || m.refiner_share.size() != 68) throw Error(what + ": corrupt: refiner shape");
-        for (const float v : m.refiner_mean) {
-            if (!(v >= 0.f && v <= m.refiner_patch_size)) throw Error(what + ": corrupt: refiner mean shape outside its patch");
-        }
-        for (const float v : m.refiner_share) {
-            if (!(v >= 0.f && v <= 1.f)) throw Error(what + ": corrupt: a refiner share outside [0, 1]");
-        }
-        if (!(m.refiner_trust_from >= 0.f && m.refiner_trust_to >= 0.f && m.refiner_trust_to <= 1.f)) {
-            throw Error(what + ": corrupt: the refiner's trust ramp");
-        }
-    }
-    if (!m.side_net.empty()) {
-        if (!refiner) throw Error(what + ": corrupt: a brow and eye refiner without the landmark refiner");
-        if (m.side_patch_size < 16 || m.side_patch_size > 256) throw Error(what + ": corrupt: the brow and eye refiner's patch size");
-        if (m.side_mean.size() != 22 || m.side_share.size() != 11) throw Error(what + ": corrupt: the brow and eye refiner's shape");
-        for (const float v : m.side_mean) {
-            if (!(v >= 0.f && v <= m.side_patch_size)) throw Error(what + ": corrupt: the brow and eye mean shape outside its patch");
-        }
-        for (const float v : m.side_share) {
-            if (!(v >= 0.f && v <= 1.f)) throw Error(what + ": corrupt: a brow and eye share outside [0, 1]");
-        }
-    }
+    if (m.stages.empty() || m.stages.size() > kMaxStages) throw Error(what + ": corrupt: stage count");
     if (!m.neutral.empty() && m.neutral.size() != m.expressions.size()) throw Error(what + ": corrupt: neutral weights");
     if (!m.reported.empty() && m.reported.size() != m.expressions.size()) throw Error(what + ": corrupt: reported expressions");
     for (const float w : m.neutral) {
@@ -83,7 +56,6 @@ void validate(const CnnModelData& m, const std::string& what) {
     for (std::size_t k = 0; k < m.full.size(); ++k) {
         if (!(m.full[k] > m.neutral[k] && m.full[k] <= 1.f)) throw Error(what + ": corrupt: a full-expression reading outside (w0, 1]");
     }
-    if (m.mirror_averaged && m.stages.empty()) throw Error(what + ": corrupt: mirror averaging without cascade stages");
     if (m.corrects_fit && !m.expressions_only) {
         throw Error(what + ": corrupt: correcting the fit's shapes is a mode of a stage that reads expressions");
     }
@@ -122,16 +94,6 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
     for (const float v : m.neutral) w.put<float>(v);
     w.put<std::uint32_t>(static_cast<std::uint32_t>(m.reported.size()));
     for (const bool v : m.reported) w.put<std::uint8_t>(v ? 1 : 0);
-    w.putString(m.refiner_net);
-    w.put<std::int32_t>(m.refiner_patch_size);
-    for (const float v : m.refiner_mean) w.put<float>(v);
-    for (const float v : m.refiner_share) w.put<float>(v);
-    w.put<float>(m.refiner_trust_from);
-    w.put<float>(m.refiner_trust_to);
-    w.putString(m.side_net);
-    w.put<std::int32_t>(m.side_patch_size);
-    for (const float v : m.side_mean) w.put<float>(v);
-    for (const float v : m.side_share) w.put<float>(v);
     w.put<std::uint8_t>(m.mirror_averaged ? 1 : 0);
     w.put<std::uint8_t>(m.corrects_fit ? 1 : 0);
     w.put<std::uint32_t>(static_cast<std::uint32_t>(m.full.size()));
@@ -188,24 +150,15 @@ CnnModelData readCnnModel(const std::string& path) {
             m.reported.push_back(flag == 1);
         }
     }
-    if (version >= 4) {
-        m.refiner_net = r.getString();
-        m.refiner_patch_size = r.get<std::int32_t>();
-        if (!m.refiner_net.empty()) {
-            for (int i = 0; i < 136; ++i) m.refiner_mean.push_back(r.get<float>());
-            for (int i = 0; i < 68; ++i) m.refiner_share.push_back(r.get<float>());
-        }
-    }
-    if (version >= 5) {
-        m.refiner_trust_from = r.get<float>();
-        m.refiner_trust_to = r.get<float>();
-    }
-    if (version >= 6) {
-        m.side_net = r.getString();
-        m.side_patch_size = r.get<std::int32_t>();
-        if (!m.side_net.empty()) {
-            for (int i = 0; i < 22; ++i) m.side_mean.push_back(r.get<float>());
-            for (int i = 0; i < 11; ++i) m.side_share.push_back(r.get<float>());
+    if (version >= 4 && version <= 9) {  // the landmark refiner, now a file of its own: skipped
+        const bool refiner = !r.getString().empty();
+        r.get<std::int32_t>();
+        for (int i = 0; refiner && i < 136 + 68; ++i) r.get<float>();
+        if (version >= 5) r.get<float>(), r.get<float>();
+        if (version >= 6) {
+            const bool sides = !r.getString().empty();
+            r.get<std::int32_t>();
+            for (int i = 0; sides && i < 22 + 11; ++i) r.get<float>();
         }
     }
     if (version >= 7) {
@@ -275,9 +228,5 @@ std::vector<int> CnnModel::rounds() const {
 bool CnnModel::hasLandmarkNet() const { return !data_->landmark_net.empty(); }
 
 bool CnnModel::expressionsOnly() const { return data_->expressions_only; }
-
-bool CnnModel::hasCascade() const { return !data_->stages.empty(); }
-
-bool CnnModel::hasRefiner() const { return !data_->refiner_net.empty(); }
 
 }  // namespace facetrack

@@ -67,25 +67,12 @@ struct CnnModelData {
     /// The final net, the 68 landmarks' displacements (landmark_net.hpp): ONNX bytes, or empty for none.
     std::string landmark_net;
     std::string provenance;
-    /// The landmark refiner (landmark_refiner.hpp; format version 4): ONNX bytes, or empty for none.
-    /// A file may hold it alone, without cascade stages.
-    std::string refiner_net;
-    int refiner_patch_size = 0;
-    std::vector<float> refiner_mean;   ///< 136: the mean shape in patch pixels, x0, y0, x1, ...
-    std::vector<float> refiner_share;  ///< 68: per landmark, the net's share of the answer, the rest LBF's
-    /// Where the net takes the whole answer as it disagrees with LBF (landmark_refiner.hpp: D0, D1;
-    /// format version 5). D1 <= D0, as in older files: never.
-    float refiner_trust_from = 0.f, refiner_trust_to = 0.f;
-    /// The brow and eye refiner (landmark_refiner.hpp, "one side at a time"; format version 6): ONNX
-    /// bytes, or empty for none. It needs the landmark refiner: it runs on that one's answer.
-    std::string side_net;
-    int side_patch_size = 0;
-    std::vector<float> side_mean;   ///< 22: one side's 11 points (kRightSide's order) in patch pixels
-    std::vector<float> side_share;  ///< 11: per point, the net's share of the answer
 };
 
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
-constexpr std::uint32_t kCnnModelVersion = 9;
+/// Versions 4-9 also held the landmark refiner, now a file of its own (refiner_model_data.hpp):
+/// the reader skips it.
+constexpr std::uint32_t kCnnModelVersion = 10;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

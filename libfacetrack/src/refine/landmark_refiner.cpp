@@ -9,16 +9,16 @@
 
 namespace facetrack::refine {
 
-RefinerLayout makeRefinerLayout(const nn::CnnModelData& data) {
-    if (data.refiner_mean.size() != 2 * core::kLandmarks || data.refiner_share.size() != core::kLandmarks) {
+RefinerLayout makeRefinerLayout(const nn::RefinerModelData& data) {
+    if (data.mean.size() != 2 * core::kLandmarks || data.share.size() != core::kLandmarks) {
         throw Error("landmark refiner: needs a mean shape of 68 points and 68 shares");
     }
     RefinerLayout layout;
-    layout.size = data.refiner_patch_size;
-    layout.mean = Eigen::Map<const core::Shape68>(data.refiner_mean.data());
-    layout.share = Eigen::Map<const Eigen::Array<float, 1, 68>>(data.refiner_share.data());
-    layout.trust_from = data.refiner_trust_from;
-    layout.trust_to = data.refiner_trust_to;
+    layout.size = data.patch_size;
+    layout.mean = Eigen::Map<const core::Shape68>(data.mean.data());
+    layout.share = Eigen::Map<const Eigen::Array<float, 1, 68>>(data.share.data());
+    layout.trust_from = data.trust_from;
+    layout.trust_to = data.trust_to;
     return layout;
 }
 
@@ -53,7 +53,7 @@ core::Shape68 refinedLandmarks(const RefinerLayout& layout, const core::Similari
     return blendedLandmarks(layout, net, lbf, netTrust(layout, net, lbf));
 }
 
-SideLayout makeSideLayout(const nn::CnnModelData& data) {
+SideLayout makeSideLayout(const nn::RefinerModelData& data) {
     if (data.side_mean.size() != 22 || data.side_share.size() != 11) {
         throw Error("brow and eye refiner: needs a mean shape of 11 points and 11 shares");
     }

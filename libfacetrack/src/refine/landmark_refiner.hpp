@@ -39,7 +39,7 @@
 // both sides' patches in one call of the net.
 
 #include "core/shape2d.hpp"
-#include "nn/cnn_model_data.hpp"
+#include "nn/refiner_model_data.hpp"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -61,7 +61,7 @@ struct RefinerLayout {
 };
 
 /// The layout a model file stores (cnn_model_data.hpp: patch size, 136 mean values, 68 shares, D0, D1).
-RefinerLayout makeRefinerLayout(const nn::CnnModelData& data);
+RefinerLayout makeRefinerLayout(const nn::RefinerModelData& data);
 
 /// g above: how far the net alone is trusted, in [0, 1].
 float netTrust(const RefinerLayout& layout, const core::Shape68& net, const core::Shape68& lbf);
@@ -91,7 +91,7 @@ struct SideLayout {
 };
 
 /// The layout a model file stores (cnn_model_data.hpp: patch size, 22 mean values, 11 shares).
-SideLayout makeSideLayout(const nn::CnnModelData& data);
+SideLayout makeSideLayout(const nn::RefinerModelData& data);
 
 /// One side of `shape` in its patch's frame: `mirrored` (the left side) mirrors x in a frame
 /// `width` pixels wide.

@@ -2,7 +2,7 @@
 
 #include "core/shape2d.hpp"
 #include "model/internals.hpp"
-#include "nn/cnn_model_data.hpp"
+#include "nn/refiner_model_data.hpp"
 #include "nn/patch_net.hpp"
 #include "refine/landmark_refiner.hpp"
 
@@ -23,10 +23,10 @@ struct RefineFaceState final : pipeline::StageState {
 
 class RefineStage final : public pipeline::Stage {
 public:
-    explicit RefineStage(std::shared_ptr<const CnnModel> model)
+    explicit RefineStage(std::shared_ptr<const RefinerModel> model)
         : model_(std::move(model)),
           layout_(makeRefinerLayout(model::dataOf(*model_))),
-          net_(model::dataOf(*model_).refiner_net, layout_.size, 2 * core::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {
+          net_(model::dataOf(*model_).net, layout_.size, 2 * core::kLandmarks, "landmark refiner '" + model_->sourcePath() + "'") {
         if (!model::dataOf(*model_).side_net.empty()) {
             side_layout_ = makeSideLayout(model::dataOf(*model_));
             side_net_.emplace(model::dataOf(*model_).side_net, side_layout_.size, 2 * static_cast<int>(kRightSide.size()),
@@ -73,23 +73,22 @@ public:
     }
 
 private:
-    std::shared_ptr<const CnnModel> model_;
+    std::shared_ptr<const RefinerModel> model_;
     RefinerLayout layout_;
     nn::PatchNet net_;
     SideLayout side_layout_;
-    std::optional<nn::PatchNet> side_net_;  ///< the brow and eye refiner, if the file has one
+    std::optional<nn::PatchNet> side_net_;  ///< the brow and eye refiner, if the model has one
     cv::Mat patch_;
     std::array<cv::Mat, 2> side_patches_;  // each its own size: reused, never reallocated
 };
 
 }  // namespace
 
-std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model) {
+std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const RefinerModel> model) {
     if (!model) {
-        return pipeline::notAvailable("refine",
-                                      "no CNN file given (Models::loadDefault() reads " + CnnModel::defaultPath() + " when it exists)");
+        return pipeline::notAvailable(
+            "refine", "no landmark refiner given (Models::loadDefault() reads " + RefinerModel::defaultPath() + " when it exists)");
     }
-    if (!model->hasRefiner()) return pipeline::notAvailable("refine", "'" + model->sourcePath() + "' has no landmark refiner");
     return std::make_unique<RefineStage>(std::move(model));
 }
 

@@ -8,13 +8,13 @@
 
 #include "pipeline/stage.hpp"
 
-#include "facetrack/cnn_model.hpp"
+#include "facetrack/refiner_model.hpp"
 
 #include <memory>
 
 namespace facetrack::refine {
 
-/// `model` null or without a refiner (CnnModel::hasRefiner): the stage is not available.
-std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const CnnModel> model);
+/// `model` null: the stage is not available.
+std::unique_ptr<pipeline::Stage> makeRefineStage(std::shared_ptr<const RefinerModel> model);
 
 }  // namespace facetrack::refine

@@ -34,7 +34,8 @@ Models Models::loadDefault() {
     models.face = FaceModel::loadDefault();
     models.landmarks = loadIfPresent<LandmarkModel>("landmark model", "landmarks stage is");
     models.eyes = loadIfPresent<EyeModel>("eye model", "gaze stage is");
-    models.cnn = loadIfPresent<CnnModel>("CNN file", "refine and cnn stages are");
+    models.refiner = loadIfPresent<RefinerModel>("landmark refiner", "refine stage is");
+    models.cnn = loadIfPresent<CnnModel>("CNN file", "cnn stage is");
     return models;
 }
 
@@ -71,7 +72,7 @@ pipeline::StageList stageList(const Models& models, const TrackerConfig& config,
     const FilterConfig& f = config.filter;
     pipeline::StageList stages;
     stages.push_back(landmarks::makeLandmarksStage(models.landmarks, detector.kind(), config.landmark_starts));
-    stages.push_back(refine::makeRefineStage(models.cnn));
+    stages.push_back(refine::makeRefineStage(models.refiner));
     stages.push_back(fit::makeFitStage(models.face, {config.max_fit_residual, config.calibration_frames, config.expression_prior}));
     stages.push_back(config.cnn_stage ? expression::makeCnnStage(models.cnn, models.face)
                                       : pipeline::notAvailable("cnn", "off (TrackerConfig::cnn_stage)"));

@@ -234,9 +234,8 @@ int copySamplesOf(const expression::WarpLayout& layout, const LabelledImage& ima
 /// cnn stage and no filter (a Tracker of these per clip).
 struct ExpressionInput {
     explicit ExpressionInput(const std::shared_ptr<const FaceModel>& model)
-        : models{model, LandmarkModel::loadDefault(), nullptr, CnnModel::load(CnnModel::defaultPath())} {
+        : models{model, LandmarkModel::loadDefault(), nullptr, nullptr, RefinerModel::load(RefinerModel::defaultPath())} {
         config.filter.enabled = false;
-        config.cnn_stage = false;
     }
     Models models;
     TrackerConfig config;
@@ -464,7 +463,7 @@ int run(int argc, char** argv) {
         still.filter.enabled = false;
         const std::string from = args.get("--starts-from");
         startTracker = std::make_unique<Tracker>(
-            Models{model, LandmarkModel::loadDefault(), nullptr, from == "fit" ? nullptr : CnnModel::load(from)}, still);
+            Models{model, LandmarkModel::loadDefault(), nullptr, from == "fit" ? nullptr : CnnModel::load(from), nullptr}, still);
         tracker.emplace(TrackerStarts{*startTracker, *detector, args.number("--max-start-deg", 180.0)});
     }
     {

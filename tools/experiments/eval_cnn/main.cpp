@@ -377,12 +377,6 @@ int run(int argc, char** argv) {
     const auto model = FaceModel::loadDefault();  // the shipped tracker's: with the landmark convention
     const auto cascade = CnnModel::load(args.get("--cascade", CnnModel::defaultPath()));
     const nn::CnnModelData& data = model::dataOf(*cascade);
-    if (data.stages.empty()) {
-        throw Error("'" + args.get("--cascade", CnnModel::defaultPath()) +
-                    "' has no cascade stages (a landmark refiner alone): for its landmarks, large poses included, use "
-                    "`facetrack eval-landmarks` on 300-W and on build/tools/make_profiled_faces's sets; for the shipped "
-                    "tracker's robustness, eval_cnn --tracker");
-    }
     const std::vector<int> expressionIds = nn::expressionIndices(model->expressionNames(), data.expressions);
     const expression::WarpLayout layout = expression::makeWarpLayout(model::dataOf(*model), expressionIds, data.patch_size);
     std::vector<nn::PatchNet> nets;
@@ -410,11 +404,11 @@ int run(int argc, char** argv) {
     TrackerConfig still;
     still.filter.enabled = false;
     const auto lbfModel = LandmarkModel::loadDefault();
-    Tracker lbf(Models{model, lbfModel, nullptr, nullptr}, still);
+    Tracker lbf(Models{model, lbfModel, nullptr, nullptr, nullptr}, still);
     FrameResult result, fullResult;
     // The whole pipeline, when the cascade moves the landmarks too.
     std::unique_ptr<Tracker> full;
-    if (cascade->hasLandmarkNet()) full = std::make_unique<Tracker>(Models{model, lbfModel, nullptr, cascade}, still);
+    if (cascade->hasLandmarkNet()) full = std::make_unique<Tracker>(Models{model, lbfModel, nullptr, cascade, nullptr}, still);
     const fit::FitBasis landmarkBasis = expression::landmarkBasis(*model, expressionIds);  // to carry the annotation to profiled copies
     DetectorConfig yunet;
     yunet.kind = DetectorKind::YuNet;

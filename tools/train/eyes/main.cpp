@@ -128,7 +128,7 @@ std::optional<Landmarks68> landmarksFor(const FrameResult& result, const tools::
 }
 
 /// The landmark stages only: the eye model being trained is not needed (nor the old one loaded).
-Models landmarkModels() { return Models{FaceModel::loadDefault(), LandmarkModel::loadDefault(), nullptr, nullptr}; }
+Models landmarkModels() { return Models{FaceModel::loadDefault(), LandmarkModel::loadDefault(), nullptr, nullptr, nullptr}; }
 
 TrackerConfig unfiltered() {
     TrackerConfig c;

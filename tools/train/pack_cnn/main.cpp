@@ -6,17 +6,13 @@
 //                                             [--gain-from-validation]]
 //                                            [--min-validation-r R [--leave-out NAME,...]]]
 //                        [--mirror-average] [--corrects-fit]
-//                        [--refiner build/refine/net.onnx] [--sides build/region/net.onnx] [--base FILE.ftm]
+//                        [--base FILE.ftm]
 //                        [--geometry build/cnn/geometry]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
 //
-// --base: start from that file's nets (the options given replace theirs). --sides: the brow and eye
-// refiner of tools/train/refine/train_region.py (landmark_refiner.hpp, one side at a time), with
-// its NET.side.txt beside it (the patch size, the 22 mean-shape values and the 11 shares).
-//
-// --refiner: the landmark refiner of tools/train/refine/train_refine.py (cnn/landmark_refiner.hpp),
-// with its NET.refiner.txt beside it (the patch size, the 136 mean-shape values, the 68 shares and,
-// when the trainer chose them, the trust ramp D0 D1); with it --nets may be left out.
+// --base: start from that file's nets (the options given replace theirs; --nets replaces its stage and its
+// geometry net, which was chosen against that stage). The refine stage's nets have their own file
+// (tools/train/pack_refiner).
 //
 // --expressions-only: the nets were trained to read expressions (train_stage.py --expressions);
 // the stage keeps the fit's pose and the shapes the fit estimates (cnn_model_data.hpp).
@@ -175,15 +171,14 @@ std::vector<float> trainingMedians(const std::string& path, const std::vector<st
 int run(int argc, char** argv) {
     const tools::Args args(
         std::vector<std::string>(argv + 1, argv + argc),
-        {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r", "--leave-out",
-         "--refiner", "--sides", "--base", "--geometry"},
+        {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r", "--leave-out", "--base",
+         "--geometry"},
         {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation", "--gain-from-validation"});
-    if (args.has("--help") || !(args.has("--nets") || args.has("--refiner") || args.has("--base")) || !args.has("--out")) {
+    if (args.has("--help") || !(args.has("--nets") || args.has("--base")) || !args.has("--out")) {
         std::puts(
             "usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
             "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R [--leave-out N,...]]\n"
-            "                [--refiner R.onnx]\n"
-            "                [--sides S.onnx] [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation\n"
+            "                [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation\n"
             "                [--gain-from-validation]] [--geometry PREFIX]");
         return args.has("--help") ? 0 : 2;
     }
@@ -196,7 +191,13 @@ int run(int argc, char** argv) {
     nn::CnnModelData model;
     if (args.has("--base")) {
         model = nn::readCnnModel(args.get("--base"));
-        if (!nets.empty()) model.stages.clear();
+        if (!nets.empty()) {  // a new stage: the base's geometry readings were chosen against its nets
+            model.stages.clear();
+            model.geometry_net.clear();
+            model.geometry_reported.clear();
+            model.geometry_neutral.clear();
+            model.geometry_full.clear();
+        }
     }
     model.provenance = args.get("--provenance", model.provenance);
     model.expressions_only = model.expressions_only || args.has("--expressions-only");
@@ -276,9 +277,6 @@ int run(int argc, char** argv) {
         if (!args.has("--min-validation-r") || nets.empty()) throw Error("--geometry goes with --nets and --min-validation-r");
         const std::string prefix = args.get("--geometry");
         model.geometry_net = readGeometryNet(prefix, model.expressions);
-        model.geometry_reported.clear();  // --base's, if it has a geometry net
-        model.geometry_neutral.clear();
-        model.geometry_full.clear();
         // on the same frames as the geometry net's: the validation people's, without the warped copies
         const auto texture_r = pairAveraged(beside(nets.back(), ".validation_r_frames.txt"), model.expressions);
         const auto geometry_r = pairAveraged(prefix + ".validation_geometry_r.txt", model.expressions);
@@ -296,35 +294,6 @@ int run(int argc, char** argv) {
             if (kept) std::printf(" %s (r %.2f against %.2f)", n.c_str(), geometry_r[k], texture_r[k]);
         }
         std::printf("\n");
-    }
-    if (args.has("--refiner")) {
-        const std::string path = args.get("--refiner");
-        model.refiner_net = readBytes(path);
-        std::stringstream layout(readBytes(path.substr(0, path.size() - std::string(".onnx").size()) + ".refiner.txt"));
-        layout >> model.refiner_patch_size;
-        model.refiner_mean.resize(136);
-        model.refiner_share.resize(68);
-        for (float& v : model.refiner_mean) layout >> v;
-        for (float& v : model.refiner_share) layout >> v;
-        if (!layout) throw Error(path + ": its .refiner.txt needs the patch size, 136 mean-shape values and 68 shares");
-        float from = 0.f, to = 0.f;
-        if (layout >> from >> to) model.refiner_trust_from = from, model.refiner_trust_to = to;
-        nn::PatchNet check(model.refiner_net, model.refiner_patch_size, 136, path);
-        std::printf("landmark refiner: %s, %d px, %zu bytes, trust ramp %.3f-%.3f\n", path.c_str(), model.refiner_patch_size,
-                    model.refiner_net.size(), model.refiner_trust_from, model.refiner_trust_to);
-    }
-    if (args.has("--sides")) {
-        const std::string path = args.get("--sides");
-        model.side_net = readBytes(path);
-        std::stringstream layout(readBytes(path.substr(0, path.size() - std::string(".onnx").size()) + ".side.txt"));
-        layout >> model.side_patch_size;
-        model.side_mean.resize(22);
-        model.side_share.resize(11);
-        for (float& v : model.side_mean) layout >> v;
-        for (float& v : model.side_share) layout >> v;
-        if (!layout) throw Error(path + ": its .side.txt needs the patch size, 22 mean-shape values and 11 shares");
-        nn::PatchNet check(model.side_net, model.side_patch_size, 22, path);
-        std::printf("brow and eye refiner: %s, %d px, %zu bytes\n", path.c_str(), model.side_patch_size, model.side_net.size());
     }
     nn::writeCnnModel(args.get("--out"), model);
     std::printf("wrote %s (%zu expressions)\n", args.get("--out").c_str(), model.expressions.size());

@@ -32,7 +32,7 @@ With --dense-teacher, the net also regresses MediaPipe's mesh points of each 300
 predictions, not ground truth) as auxiliary outputs: 1,829 faces with 68 points each overfit, and
 the denser supervision is meant to regularise the features. The auxiliary outputs are dropped at export.
 --export writes the best epoch as OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's
-dnn loads) and OUT.refiner.txt (patch size, mean shape, shares, with --profiled D0 D1) for pack_cnn --refiner.
+dnn loads) and OUT.refiner.txt (patch size, mean shape, shares, with --profiled D0 D1) for pack_refiner --refiner.
 """
 import argparse, copy, csv, json, math, os, sys, time
 

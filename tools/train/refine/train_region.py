@@ -7,7 +7,7 @@ refiner). One net serves both sides: the subject's left side is mirrored into th
         # S = train, validation, test: the annotation and the shipped pipeline's points
     /usr/bin/python3 -m tools.train.refine.train_region --out build/region/net [--minutes 40] [--size 64]
     /usr/bin/python3 -m tools.train.refine.train_region --out build/region/net --evaluate validation|test [--export] [--brows-only]
-    build/tools/pack_cnn --base models/cnn_cascade.ftm --sides build/region/net.onnx --out models/cnn_cascade.ftm --provenance "..."
+    build/tools/pack_refiner --base models/landmark_refiner.ftm --sides build/region/net.onnx --out models/landmark_refiner.ftm --provenance "..."
 
 Inputs: build/refine/faces.npz (load_faces.py: every 300-W crop, grey) and the points above. The patch
 (SIZE x SIZE) is the crop warped by the similarity that puts the side's 11 pipeline points best onto their mean
@@ -18,7 +18,7 @@ changes; with --profiled also their copies turned to large yaw (face profiling, 
 the pipeline's), on the sum of each set's error relative to the pipeline's; the test split is read only with
 --evaluate test. --export writes the best epoch as
 OUT.onnx (opset 13, eval mode, BatchNorm folded: what OpenCV 4.6's dnn loads) and OUT.side.txt (patch size, the
-22 mean-shape values, the 11 shares) for pack_cnn --sides.
+22 mean-shape values, the 11 shares) for pack_refiner --sides.
 
 --expressions CSV (tried, not shipped: docs/decisions.md): the net also reads the side's brow shapes (browDown,
 browInnerUp, browOuterUp of that side) from label_dense's faces300w.csv, the dense teacher labels (MediaPipe's mesh
