@@ -12,8 +12,8 @@ namespace nn {
 namespace {
 
 /// One net's layout: a patch size, `points` mean-shape points inside the patch, a share in [0, 1] each.
-void validateLayout(int size, const std::vector<float>& mean, const std::vector<float>& share, std::size_t points,
-                    const std::string& what, const std::string& net) {
+void validateLayout(int size, const std::vector<float>& mean, const std::vector<float>& share, std::size_t points, const std::string& what,
+                    const std::string& net) {
     if (size < 16 || size > 256) throw Error(what + ": corrupt: the " + net + "'s patch size");
     if (mean.size() != 2 * points || share.size() != points) throw Error(what + ": corrupt: the " + net + "'s shape");
     for (const float v : mean) {
