@@ -52,11 +52,11 @@ run_step() {
     refine_data)
       mkdir -p build/refine build/region
       for s in train validation test; do
-        $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --lbf-only --dlib none --points-out build/refine/points_$s.csv
+        FACETRACK_MODEL_DIR=$models $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --lbf-only --dlib none --points-out build/refine/points_$s.csv
         $bin/make_profiled_faces --split $s --out build/profiled/$s --copies 10
       done
       for s in train validation; do
-        $bin/facetrack eval-landmarks build/profiled/$s --lbf-only --landmark-starts 5 --dlib none --points-out build/profiled/points_$s.csv
+        FACETRACK_MODEL_DIR=$models $bin/facetrack eval-landmarks build/profiled/$s --lbf-only --landmark-starts 5 --dlib none --points-out build/profiled/points_$s.csv
         "${py[@]}" tools.train.refine.load_faces build/profiled/$s build/profiled/$s/faces.npz
       done
       "${py[@]}" tools.train.refine.load_faces ../shared/data/faces300w build/refine/faces.npz ;;
@@ -67,11 +67,11 @@ run_step() {
     sides)
       # The pipeline's points with the new refiner, then the side net trained on them.
       for s in train validation test; do
-        $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --refiner $models/landmark_refiner.ftm --dlib none \
+        FACETRACK_MODEL_DIR=$models $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --refiner $models/landmark_refiner.ftm --dlib none \
           --points-out build/region/points_$s.csv
       done
       for s in train validation; do
-        $bin/facetrack eval-landmarks build/profiled/$s --refiner $models/landmark_refiner.ftm --dlib none \
+        FACETRACK_MODEL_DIR=$models $bin/facetrack eval-landmarks build/profiled/$s --refiner $models/landmark_refiner.ftm --dlib none \
           --points-out build/region/profiled_points_$s.csv
       done
       local net=(--out build/region/c8 --widths 8,16,32,64 --strides 2,2,2,2 --hidden 128 --profiled build/profiled)
@@ -79,26 +79,26 @@ run_step() {
       "${py[@]}" tools.train.refine.train_region "${net[@]}" --evaluate validation --brows-only --export
       $bin/pack_refiner --base $models/landmark_refiner.ftm --sides build/region/c8.onnx --out $models/landmark_refiner.ftm \
         --provenance "tools/train/retrain_all.sh: refiner, sides" ;;
-    expression)
-      $bin/make_cnn_samples --starts-from fit --max-start-deg 25 --perturb 6 --clip-perturb 3 --rotation-deg 5 --yaw-deg 6 \
+    expression)  # its intermediate files under build/retrain, beside (not over) a manual run's in build/
+      mkdir -p $out/tracked $out/cnn
+      FACETRACK_MODEL_DIR=$models $bin/make_cnn_samples --starts-from fit --max-start-deg 25 --perturb 6 --clip-perturb 3 --rotation-deg 5 --yaw-deg 6 \
         --translation 0.02 --depth 0.04 --expression-sigma 0.05 --tracked-clips --expression-copies 6 --clip-copies 3 \
-        --clip-copy-every 6 --arkit ../shared/data/arkit --arkit-every 4 --out build/cnn_samples_v2
-      "${py[@]}" tools.train.expression.train_stage --samples build/cnn_samples_v2 --out build/cnn/v2 --expressions \
+        --clip-copy-every 6 --arkit ../shared/data/arkit --arkit-every 4 --out $out/cnn_samples
+      "${py[@]}" tools.train.expression.train_stage --samples $out/cnn_samples --out $out/cnn/v2 --expressions \
         --teacher ../shared/data/teacher --copies-per-epoch 2 --clips-per-epoch 1.5 --dropout 0.3 --minutes 45
       # the geometry net reads the landmarks as the retrained pipeline tracks every clip (the trainer reads the splits)
-      mkdir -p build/tracked
       for clip in ../shared/data/clips/*.mp4; do
         FACETRACK_MODEL_DIR=$models $bin/facetrack track "$clip" --raw --profile none \
-          --out "build/tracked/$(basename "$clip" .mp4).jsonl" 2>/dev/null
+          --out "$out/tracked/$(basename "$clip" .mp4).jsonl" 2>/dev/null
       done
       for split in train validation; do
-        FACETRACK_MODEL_DIR=$models tools/data/track_faces300w.sh $split build/tracked_300w
+        FACETRACK_MODEL_DIR=$models tools/data/track_faces300w.sh $split $out/tracked_300w
       done
-      "${py[@]}" tools.train.expression.train_geometry --tracked build/tracked --tracked-crops build/tracked_300w \
-        --net build/cnn/v2 --out build/cnn/geometry
-      $bin/pack_cnn --nets build/cnn/v2.onnx --expressions-only --rest-from-validation \
+      "${py[@]}" tools.train.expression.train_geometry --tracked $out/tracked --tracked-crops $out/tracked_300w \
+        --net $out/cnn/v2 --out $out/cnn/geometry
+      $bin/pack_cnn --nets $out/cnn/v2.onnx --expressions-only --rest-from-validation \
         --gain-from-validation --mirror-average --min-validation-r 0.1 --leave-out cheekSquint_L,cheekSquint_R,noseSneer_L,noseSneer_R \
-        --corrects-fit --geometry build/cnn/geometry --out $models/cnn_cascade.ftm \
+        --corrects-fit --geometry $out/cnn/geometry --out $models/cnn_cascade.ftm \
         --provenance "tools/train/retrain_all.sh: expressions" ;;
     *) echo "retrain_all: no step '$name'" >&2; return 2 ;;
   esac
