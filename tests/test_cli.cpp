@@ -522,5 +522,25 @@ TEST(Cli, LandmarksComeFromThePipelineWithACascadesLandmarkNetAndFromLbfWithLbfO
     EXPECT_NE(noNet.exit_code, 0);
 }
 
+// The shipped landmark refiner moves LBF's points by default and --refiner none leaves it out; the
+// shipped CNN file reads expressions only, so given as --cascade it is refused.
+TEST(Cli, LandmarksUseTheShippedRefinerUnlessToldNot) {
+    FACETRACK_REQUIRE_SHARED();
+    const std::string refiner = test::sourceDir() + "/models/landmark_refiner.ftm";
+    const std::string cascade = test::sourceDir() + "/models/cnn_cascade.ftm";
+    if (!std::filesystem::exists(refiner) || !std::filesystem::exists(cascade)) GTEST_SKIP() << "the CNN files are not shipped";
+    const std::string image = test::tempPath("cli_refiner.png");
+    ASSERT_TRUE(cv::imwrite(image, test::clipFrames(1).at(0)));
+    const CliRun shipped = runCli("landmarks '" + image + "'");
+    const CliRun none = runCli("landmarks '" + image + "' --refiner none");
+    ASSERT_EQ(shipped.exit_code, 0) << shipped.err;
+    ASSERT_EQ(none.exit_code, 0) << none.err;
+    EXPECT_EQ(jsonLines(shipped.out).at(0)["method"], "facetrack LBF + refiner");
+    EXPECT_EQ(jsonLines(none.out).at(0)["method"], "facetrack LBF");
+    const CliRun noLandmarkNet = runCli("landmarks '" + image + "' --cascade '" + cascade + "'");
+    EXPECT_NE(noLandmarkNet.exit_code, 0);
+    EXPECT_NE(noLandmarkNet.err.find("has no landmark net"), std::string::npos) << noLandmarkNet.err;
+}
+
 }  // namespace
 }  // namespace facetrack
