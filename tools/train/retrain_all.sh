@@ -21,11 +21,11 @@ bin=build/tools
 
 steps=(
   "face_model        1 s   build/tools/convert_face_model (deterministic: the shipped file again)"
-  "dense_labels     7 min  MediaPipe's mesh fitted with the face model (teacher labels, not ground truth)"
-  "landmarks       31 min  the LBF regressor on the 300-W training split"
-  "convention       5 min  the fit's landmark convention and expression prior"
-  "eyes            30 min  the eye model's forests, corner cascade and iris CNN"
-  "refine_data     15 min  LBF's points on 300-W, face-profiled copies, the crops as arrays"
+  "dense_labels    18 min  MediaPipe's mesh fitted with the face model (teacher labels, not ground truth)"
+  "landmarks       18 min  the LBF regressor on the 300-W training split"
+  "convention       4 min  the fit's landmark convention and expression prior"
+  "eyes            27 min  the eye model's forests, corner cascade and iris CNN"
+  "refine_data      9 min  LBF's points on 300-W, face-profiled copies, the crops as arrays"
   "refine          60 min  the landmark refiner"
   "sides           30 min  the brow and eye refiner per side"
   "expression      65 min  the expression stage's samples (teacher, warped faces), texture and geometry nets, packed into the CNN file"
@@ -52,7 +52,8 @@ run_step() {
     refine_data)
       mkdir -p build/refine build/region
       for s in train validation test; do
-        FACETRACK_MODEL_DIR=$models $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --lbf-only --dlib none --points-out build/refine/points_$s.csv
+        FACETRACK_MODEL_DIR=$models $bin/facetrack eval-landmarks ../shared/data/faces300w --split $s --lbf-only --landmark-starts 5 --dlib none \
+          --points-out build/refine/points_$s.csv
         $bin/make_profiled_faces --split $s --out build/profiled/$s --copies 10
       done
       for s in train validation; do
