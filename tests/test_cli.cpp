@@ -380,6 +380,32 @@ TEST(Cli, EvalGazeSeparatesTheFitsErrorFromTheGeometrysOnRenders) {
     EXPECT_EQ(run.out.find("nan"), std::string::npos) << run.out;
 }
 
+/// The share of open eye frames read as closed that eval-gaze prints for one clip.
+double openReadAsClosed(const std::string& out) {
+    const std::string key = "open frames read as closed ";
+    const std::size_t at = out.find(key);
+    return at == std::string::npos ? std::nan("") : std::stod(out.substr(at + key.size()));
+}
+
+TEST(Cli, EvalGazeTakesEyesLabelledClosedByEyeAsClosedWhateverTheTeacherReads) {
+    FACETRACK_REQUIRE_SHARED();
+    if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
+    // Michael Rosen closes his eyes for two seconds (frames 19-48); the teacher reads many of
+    // those frames open, so without the labels the tracker's closed eyes count as misread.
+    const std::string common = "eval-gaze --clips hellomeme_nice.mp4 --split none --synthetic 0 --labels ";
+    const CliRun labelled = runCli(common + "'" + test::sourceDir() + "/data/expression_labels.csv'");
+    ASSERT_EQ(labelled.exit_code, 0) << labelled.err;
+    const std::string empty = test::tempPath("no_labels.csv");
+    std::ofstream(empty) << "clip,first,last,label\n";
+    const CliRun unlabelled = runCli(common + "'" + empty + "'");
+    std::filesystem::remove(empty);
+    ASSERT_EQ(unlabelled.exit_code, 0) << unlabelled.err;
+    EXPECT_NE(labelled.out.find("labelled closed by eye: not counted as open"), std::string::npos) << labelled.out;
+    EXPECT_LT(openReadAsClosed(labelled.out), 5.0) << labelled.out;
+    EXPECT_GT(openReadAsClosed(unlabelled.out), 10.0) << unlabelled.out;
+    EXPECT_NE(unlabelled.out.find("read as closed, left eye: frames "), std::string::npos) << unlabelled.out;
+}
+
 TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {
     FACETRACK_REQUIRE_SHARED();
     // A large-pose set as make_profiled_faces writes one: grey PGM images, .pts, poses.csv.

@@ -75,6 +75,7 @@ const std::map<std::string, std::vector<std::string>>& expectedShapes() {
         {"squint", {"eyeSquintLeft", "eyeSquintRight", "cheekSquintLeft", "cheekSquintRight"}},
         {"cheek_puff", {"cheekPuff"}},
         {"blink", {"eyeBlinkLeft", "eyeBlinkRight"}},
+        {"eyes_closed", {"eyeBlinkLeft", "eyeBlinkRight"}},
         {"wink_left", {"eyeBlinkLeft"}},
         {"wink_right", {"eyeBlinkRight"}},
         {"tongue", {"tongueOut"}},
@@ -510,16 +511,13 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     }
     const std::string shared = core::sharedDirectory();
     if (shared.empty()) throw Error("../shared not found: the clips live there");
-    // The repository's labels: from the working directory, or beside the models/ folder in use.
-    const std::string defaultLabels = core::firstExistingFile(
-        {"data/expression_labels.csv", modelDirectory() + "/../data/expression_labels.csv"});
-    const std::string labelsPath = args.get("--labels", defaultLabels.empty() ? "data/expression_labels.csv" : defaultLabels);
-    const auto segments = readLabels(labelsPath);
+    const std::string labels = labelsPath(args);
+    const auto segments = readLabels(labels);
     std::vector<std::string> clips = args.positional();
     if (clips.empty()) {
         const std::vector<std::string> heldOut = args.has("--held-out")
-                                                     ? tools::clipsOfSplit(
-                                                           "heldout", (fs::path(labelsPath).parent_path() / "clip_splits.csv").string())
+                                                     ? tools::clipsOfSplit("heldout",
+                                                                           (fs::path(labels).parent_path() / "clip_splits.csv").string())
                                                      : std::vector<std::string>{};
         for (const auto& s : segments)
             if (std::find(clips.begin(), clips.end(), s.clip) == clips.end() &&

@@ -7,6 +7,7 @@
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
+#include "common/expression_labels.hpp"
 #include "common/faces300w.hpp"
 #include "common/teacher.hpp"
 #include "eval_gaze_synthetic.hpp"
@@ -24,9 +25,12 @@
 #include <opencv2/videoio.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <set>
 #include <sstream>
 
 namespace facetrack::cli {
@@ -34,13 +38,16 @@ namespace facetrack::cli {
 namespace {
 
 const char* kUsage =
-    R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [--bare-faces] [tracker options]
+    R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [--bare-faces] [--labels CSV]
+                          [tracker options]
 The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, not ground truth):
   pupil    pupil centre vs the teacher's iris centre, open eyes only (aperture >= 0.8 of the
            clip's median), over the outer-eye-corner distance: mean and p95
   blink    per clip and eye, closed events (runs with the teacher's aperture below half the clip's
            median): the share with eyeBlink >= 0.5 in the run (recall); and the share of clearly open
-           frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5
+           frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5, and those frames. Frames
+           --labels (default data/expression_labels.csv) marks closed by eye (blink, eyes_closed,
+           wink_left, wink_right) are not open, whatever the teacher reads
   synthetic  N renders of the face model with a textured iris at known gaze (see docs/gaze.md):
            angular error by inter-ocular bin, mean and p95; the mean signed error (bias) and the
            single-frame head pose's error; then the targets' short sequences. The faces have
@@ -49,6 +56,33 @@ The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, 
 --eyes FILE evaluates another eye model than the shipped one (e.g. a candidate from train_eyes).
 Defaults: the held-out clips liveportrait_d14_gaze_shifts.mp4 and fgnet_talking_face_franck.mp4,
 the 300-W validation split, 400 synthetic renders.)";
+
+/// Per clip and eye (the subject's left, right): the frames labelled closed by eye.
+using ClosedByEye = std::map<std::string, std::array<std::set<int>, 2>>;
+
+ClosedByEye readClosedByEye(const std::string& labelsPath) {
+    ClosedByEye closed;
+    for (const auto& seg : tools::readExpressionLabels(labelsPath)) {
+        const bool both = seg.label == "blink" || seg.label == "eyes_closed";
+        for (int e = 0; e < 2; ++e) {
+            if (!both && seg.label != (e == 0 ? "wink_left" : "wink_right")) continue;
+            for (int f = seg.first; f <= seg.last; ++f) closed[seg.clip][static_cast<std::size_t>(e)].insert(f);
+        }
+    }
+    return closed;
+}
+
+/// "3-7, 12" from sorted frame numbers.
+std::string frameRuns(const std::vector<int>& frames) {
+    std::string out;
+    for (std::size_t i = 0; i < frames.size();) {
+        std::size_t j = i;
+        while (j + 1 < frames.size() && frames[j + 1] == frames[j] + 1) ++j;
+        out += (out.empty() ? "" : ", ") + std::to_string(frames[i]) + (j > i ? "-" + std::to_string(frames[j]) : "");
+        i = j + 1;
+    }
+    return out;
+}
 
 const EyeGaze& eyeOf(const GazeResult& g, gaze::Eye e) { return e == gaze::Eye::Left ? g.left : g.right; }
 float blinkOf(const ExpressionResult& x, gaze::Eye e) {
@@ -61,8 +95,8 @@ struct ClipFrame {
 };
 
 void evalClip(const std::string& shared, const std::string& clip, const std::map<std::string, tools::TeacherRecord>& teacher,
-              const Models& models, const TrackerConfig& config, std::vector<double>& pupilErrors, std::vector<double>& eventsFound,
-              std::vector<double>& openAsClosed) {
+              const std::array<std::set<int>, 2>& closedByEye, const Models& models, const TrackerConfig& config,
+              std::vector<double>& pupilErrors, std::vector<double>& eventsFound, std::vector<double>& openAsClosed) {
     cv::VideoCapture video(clipPath(shared, clip));
     if (!video.isOpened()) throw Error("cannot open clip " + clip);
     Tracker tracker(models, config);
@@ -78,8 +112,10 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
         frames.push_back(std::move(cf));
     }
     std::vector<double> clipPupil;
-    long events = 0, found = 0, open = 0, openClosed = 0;
+    long events = 0, found = 0, open = 0, openClosed = 0, labelledClosed = 0;
+    std::array<std::vector<int>, 2> misread;  // per eye: open frames read as closed
     for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
+        const std::set<int>& closed = closedByEye[e == gaze::Eye::Left ? 0 : 1];
         std::vector<double> apertures;
         for (const auto& f : frames)
             if (f.teacher) apertures.push_back(f.teacher->eye(e).aperture());
@@ -93,12 +129,17 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
             const auto& f = frames[i];
             if (!f.teacher || !f.face || !f.face->gaze || !f.face->landmarks) continue;
             if (aperture(i) >= 0.8 * median) {
+                if (closed.count(static_cast<int>(i))) {
+                    ++labelledClosed;
+                    continue;
+                }
                 const Landmarks68& l = *f.face->landmarks;
                 const double corners = std::hypot(l[45].x - l[36].x, l[45].y - l[36].y);
                 const Point2 p = eyeOf(*f.face->gaze, e).pupil_px, c = f.teacher->eye(e).iris_centre;
                 clipPupil.push_back(std::hypot(p.x - c.x, p.y - c.y) / corners);
                 ++open;
                 openClosed += blinks(i);
+                if (blinks(i)) misread[e == gaze::Eye::Left ? 0 : 1].push_back(static_cast<int>(i));
             }
         }
         // Closed events: runs below half the median; found when eyeBlink >= 0.5 within the run (+-1 frame).
@@ -124,6 +165,12 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
         "open frames read as closed %.2f %% (%ld of %ld)\n",
         clip.c_str(), mean(clipPupil), percentile(clipPupil, 0.95), clipPupil.size(), events, found,
         events ? static_cast<double>(found) / events : std::nan(""), open ? 100.0 * openClosed / open : 0.0, openClosed, open);
+    if (labelledClosed > 0)
+        std::printf("    %ld eye frames the teacher reads open are labelled closed by eye: not counted as open\n", labelledClosed);
+    for (int e = 0; e < 2; ++e)
+        if (!misread[static_cast<std::size_t>(e)].empty())
+            std::printf("    read as closed, %s eye: frames %s\n", e == 0 ? "left" : "right",
+                        frameRuns(misread[static_cast<std::size_t>(e)]).c_str());
 }
 
 void eval300W(const std::string& shared, tools::Split split, const Models& models, const TrackerConfig& config) {
@@ -203,7 +250,7 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
 }  // namespace
 
 int runEvalGaze(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic"}), trackingFlags({"--help", "--bare-faces"}));
+    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic", "--labels"}), trackingFlags({"--help", "--bare-faces"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -221,9 +268,14 @@ int runEvalGaze(const std::vector<std::string>& argv) {
     const auto clips = tools::splitList(args.get("--clips", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
     if (!clips.empty()) {
         const auto teacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
+        const ClosedByEye closed = readClosedByEye(labelsPath(args));
         std::vector<double> pupil, recall, openClosed;
         std::printf("clips (teacher: MediaPipe iris + eyelids):\n");
-        for (const auto& clip : clips) evalClip(shared, clip, teacher, models, config, pupil, recall, openClosed);
+        for (const auto& clip : clips) {
+            const auto labelled = closed.find(std::filesystem::path(clip).filename().string());
+            evalClip(shared, clip, teacher, labelled == closed.end() ? std::array<std::set<int>, 2>{} : labelled->second, models, config,
+                     pupil, recall, openClosed);
+        }
         std::printf(
             "clips together: pupil error mean %.4f p95 %.4f; blink recall (mean over clips) %.2f; "
             "open frames read as closed %.2f %%\n",

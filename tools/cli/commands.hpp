@@ -7,8 +7,10 @@
 #include "app/overlay.hpp"
 #include "app/tracking_options.hpp"
 
+#include "core/environment.hpp"
 #include "facetrack/detector.hpp"
 #include "facetrack/tracker.hpp"
+#include "facetrack/version.hpp"
 
 #include <filesystem>
 
@@ -35,6 +37,13 @@ inline std::string clipPath(const std::string& shared, const std::string& clip) 
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw Error("no such clip: '" + path + "'");
     return path;
+}
+
+/// The expression labels (data/expression_labels.csv): --labels, else the repository's file, from
+/// the working directory or beside the models/ folder in use.
+inline std::string labelsPath(const tools::Args& args) {
+    const std::string found = core::firstExistingFile({"data/expression_labels.csv", modelDirectory() + "/../data/expression_labels.csv"});
+    return args.get("--labels", found.empty() ? "data/expression_labels.csv" : found);
 }
 
 // The tools' shared pieces, by their short names.
