@@ -8,8 +8,8 @@
 #   tools/train/retrain_all.sh --only N   run step N alone
 #
 # Each step's output goes to build/retrain/<step>.log; a finished step leaves build/retrain/<step>.done,
-# so a second run (after a reboot, a kill) skips it. About 4 h on the 2-core development
-# machine, summed from each step's measured time (tools/README.md). Run it in the background:
+# so a second run (after a reboot, a kill) skips it. 3 h 28 min on the 2-core development
+# machine, end to end (each step's time: tools/README.md). Run it in the background:
 #   nohup tools/train/retrain_all.sh > build/retrain.out 2>&1 &
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -25,10 +25,10 @@ steps=(
   "landmarks       18 min  the LBF regressor on the 300-W training split"
   "convention       4 min  the fit's landmark convention and expression prior"
   "eyes            27 min  the eye model's forests, corner cascade and iris CNN"
-  "refine_data      9 min  LBF's points on 300-W, face-profiled copies, the crops as arrays"
-  "refine          60 min  the landmark refiner"
-  "sides           30 min  the brow and eye refiner per side"
-  "expression      65 min  the expression stage's samples (teacher, warped faces), texture and geometry nets, packed into the CNN file"
+  "refine_data     10 min  LBF's points on 300-W, face-profiled copies, the crops as arrays"
+  "refine          55 min  the landmark refiner"
+  "sides           23 min  the brow and eye refiner per side"
+  "expression      53 min  the expression stage's samples (teacher, warped faces), texture and geometry nets, packed into the CNN file"
 )
 
 done_file() { echo "$out/$1.done"; }
