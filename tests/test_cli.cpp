@@ -391,8 +391,9 @@ TEST(Cli, EvalGazeTakesEyesLabelledClosedByEyeAsClosedWhateverTheTeacherReads) {
     FACETRACK_REQUIRE_SHARED();
     if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
     // Michael Rosen closes his eyes for two seconds (frames 19-48); the teacher reads many of
-    // those frames open, so without the labels the tracker's closed eyes count as misread.
-    const std::string common = "eval-gaze --clips hellomeme_nice.mp4 --split none --synthetic 0 --labels ";
+    // those frames open, so without the labels the tracker's closed eyes count as misread (the
+    // lids alone decide: the blendshape teacher reads some of those frames closed).
+    const std::string common = "eval-gaze --clips hellomeme_nice.mp4 --split none --synthetic 0 --blendshapes none --labels ";
     const CliRun labelled = runCli(common + "'" + test::sourceDir() + "/data/expression_labels.csv'");
     ASSERT_EQ(labelled.exit_code, 0) << labelled.err;
     const std::string empty = test::tempPath("no_labels.csv");
@@ -404,6 +405,23 @@ TEST(Cli, EvalGazeTakesEyesLabelledClosedByEyeAsClosedWhateverTheTeacherReads) {
     EXPECT_LT(openReadAsClosed(labelled.out), 5.0) << labelled.out;
     EXPECT_GT(openReadAsClosed(unlabelled.out), 10.0) << unlabelled.out;
     EXPECT_NE(unlabelled.out.find("read as closed, left eye: frames "), std::string::npos) << unlabelled.out;
+}
+
+TEST(Cli, EvalGazeDoesNotCallOpenTheEyesTheBlendshapeTeacherReadsAsClosed) {
+    FACETRACK_REQUIRE_SHARED();
+    if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
+    // A man reading from notes, lids lowered all clip long: against the clip's median the
+    // teacher's lids are open, while its blendshapes read his right eye as closed (eyeBlinkRight
+    // 0.5-0.7) on most frames, as the tracker does.
+    const std::string common = "eval-gaze --clips lrs3_QoT0S2vu9m4_00002.mp4 --split none --synthetic 0";
+    const CliRun both = runCli(common);
+    ASSERT_EQ(both.exit_code, 0) << both.err;
+    const CliRun lidsAlone = runCli(common + " --blendshapes none");
+    ASSERT_EQ(lidsAlone.exit_code, 0) << lidsAlone.err;
+    EXPECT_NE(both.out.find("read eyeBlink >= 0.5 by its blendshapes: not counted as open"), std::string::npos) << both.out;
+    EXPECT_EQ(lidsAlone.out.find("by its blendshapes"), std::string::npos) << lidsAlone.out;
+    EXPECT_GT(openReadAsClosed(lidsAlone.out), 50.0) << lidsAlone.out;
+    EXPECT_LT(openReadAsClosed(both.out), 40.0) << both.out;
 }
 
 TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {

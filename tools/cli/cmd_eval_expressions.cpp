@@ -7,6 +7,7 @@
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
+#include "common/blendshape_teacher.hpp"
 #include "common/clip_splits.hpp"
 #include "common/expression_labels.hpp"
 #include "core/environment.hpp"
@@ -21,10 +22,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <filesystem>
 #include <map>
-#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -182,42 +181,6 @@ void barPlot(const std::string& path, const std::array<double, kArkitBlendshapeC
     }
     cv::line(img, {left, top}, {w - 10, top}, cv::Scalar(255, 255, 255), 1);
     if (!cv::imwrite(path, img)) throw Error("cannot write '" + path + "'");
-}
-
-/// MediaPipe Face Landmarker's blendshape scores of every clip frame (../shared/data/teacher/
-/// clips_blendshapes.csv; teacher labels, not ground truth), keyed "CLIP#FRAME"; frames where it
-/// found no face are left out.
-std::map<std::string, Weights> readTeacher(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw Error("cannot read the blendshape teacher '" + path + "' (--no-teacher leaves it out)");
-    auto split = [](const std::string& line) {
-        std::vector<std::string> fields;
-        std::stringstream s(line);
-        for (std::string f; std::getline(s, f, ',');) fields.push_back(f);
-        return fields;
-    };
-    std::string line;
-    std::getline(in, line);
-    const std::vector<std::string> header = split(line);
-    std::vector<int> shape(header.size(), -1);
-    for (std::size_t c = 0; c < header.size(); ++c) shape[c] = arkitIndex(header[c]);
-    const auto column = [&](const std::string& name) {
-        const auto it = std::find(header.begin(), header.end(), name);
-        if (it == header.end()) throw Error(path + ": no column '" + name + "'");
-        return static_cast<std::size_t>(it - header.begin());
-    };
-    const std::size_t clip = column("clip"), frame = column("frame"), face = column("face");
-    std::map<std::string, Weights> out;
-    while (std::getline(in, line)) {
-        const std::vector<std::string> f = split(line);
-        if (f.size() > face && f[face] == "0") continue;  // no face found: no scores
-        if (f.size() != header.size()) throw Error(path + ": a row without " + std::to_string(header.size()) + " fields");
-        Weights w{};
-        for (std::size_t c = 0; c < f.size(); ++c)
-            if (shape[c] >= 0) w[static_cast<std::size_t>(shape[c])] = std::stof(f[c]);
-        out[f[clip] + "#" + f[frame]] = w;
-    }
-    return out;
 }
 
 /// A labels' source (the teacher's, the dense labels) as a track of `frames` frames of `clip`.
@@ -531,7 +494,7 @@ int runEvalExpressions(const std::vector<std::string>& argv) {
     std::map<std::string, Weights> dense;
     if (args.has("--dense")) dense = readDenseLabels(args.get("--dense"), *models.face);
     std::map<std::string, Weights> teacher;
-    if (!args.has("--no-teacher")) teacher = readTeacher(shared + "/data/teacher/clips_blendshapes.csv");
+    if (!args.has("--no-teacher")) teacher = tools::readBlendshapeTeacher(shared + "/data/teacher/clips_blendshapes.csv");
     // A clip is a name in ../shared/data/clips (as the labels name it) or a path to one.
     std::map<std::string, std::string> paths;
     for (auto& clip : clips) {

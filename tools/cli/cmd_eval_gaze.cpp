@@ -7,6 +7,7 @@
 #include "stats.hpp"
 
 #include "app/image_view.hpp"
+#include "common/blendshape_teacher.hpp"
 #include "common/expression_labels.hpp"
 #include "common/faces300w.hpp"
 #include "common/teacher.hpp"
@@ -39,7 +40,7 @@ namespace {
 
 const char* kUsage =
     R"(usage: facetrack eval-gaze [--clips CLIP,CLIP] [--split validation|test|none] [--synthetic N|0] [--bare-faces] [--labels CSV]
-                          [tracker options]
+                          [--blendshapes CSV|none] [tracker options]
 The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, not ground truth):
   pupil    pupil centre vs the teacher's iris centre, open eyes only (aperture >= 0.8 of the
            clip's median), over the outer-eye-corner distance: mean and p95
@@ -47,7 +48,9 @@ The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, 
            median): the share with eyeBlink >= 0.5 in the run (recall); and the share of clearly open
            frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5, and those frames. Frames
            --labels (default data/expression_labels.csv) marks closed by eye (blink, eyes_closed,
-           wink_left, wink_right) are not open, whatever the teacher reads
+           wink_left, wink_right) are not open, whatever the teacher reads; nor are frames the
+           blendshape teacher reads eyeBlink >= 0.5 (--blendshapes, default ../shared/data/teacher/
+           clips_blendshapes.csv; none: the lids alone decide)
   synthetic  N renders of the face model with a textured iris at known gaze (see docs/gaze.md):
            angular error by inter-ocular bin, mean and p95; the mean signed error (bias) and the
            single-frame head pose's error; then the targets' short sequences. The faces have
@@ -85,18 +88,21 @@ std::string frameRuns(const std::vector<int>& frames) {
 }
 
 const EyeGaze& eyeOf(const GazeResult& g, gaze::Eye e) { return e == gaze::Eye::Left ? g.left : g.right; }
-float blinkOf(const ExpressionResult& x, gaze::Eye e) {
-    return x.arkit[static_cast<std::size_t>(arkitIndex(e == gaze::Eye::Left ? "eyeBlinkLeft" : "eyeBlinkRight"))];
+std::size_t blinkIndex(gaze::Eye e) {
+    return static_cast<std::size_t>(arkitIndex(e == gaze::Eye::Left ? "eyeBlinkLeft" : "eyeBlinkRight"));
 }
+float blinkOf(const ExpressionResult& x, gaze::Eye e) { return x.arkit[blinkIndex(e)]; }
 
 struct ClipFrame {
     std::optional<tools::TeacherRecord> teacher;
+    std::optional<tools::BlendshapeScores> blendshapes;  ///< the blendshape teacher's, where it found the face
     std::optional<FaceResult> face;
 };
 
 void evalClip(const std::string& shared, const std::string& clip, const std::map<std::string, tools::TeacherRecord>& teacher,
-              const std::array<std::set<int>, 2>& closedByEye, const Models& models, const TrackerConfig& config,
-              std::vector<double>& pupilErrors, std::vector<double>& eventsFound, std::vector<double>& openAsClosed) {
+              const std::map<std::string, tools::BlendshapeScores>& blendshapes, const std::array<std::set<int>, 2>& closedByEye,
+              const Models& models, const TrackerConfig& config, std::vector<double>& pupilErrors, std::vector<double>& eventsFound,
+              std::vector<double>& openAsClosed) {
     cv::VideoCapture video(clipPath(shared, clip));
     if (!video.isOpened()) throw Error("cannot open clip " + clip);
     Tracker tracker(models, config);
@@ -106,16 +112,18 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
     for (int f = 0; video.read(bgr); ++f) {
         tracker.process(tools::viewOf(bgr), f / 30.0, result);
         ClipFrame cf;
-        const auto t = teacher.find(tools::teacherKey(std::filesystem::path(clip).filename().string(), f));
-        if (t != teacher.end()) cf.teacher = t->second;
+        const std::string key = tools::teacherKey(std::filesystem::path(clip).filename().string(), f);
+        if (const auto t = teacher.find(key); t != teacher.end()) cf.teacher = t->second;
+        if (const auto b = blendshapes.find(key); b != blendshapes.end()) cf.blendshapes = b->second;
         if (!result.faces.empty()) cf.face = result.faces[0];
         frames.push_back(std::move(cf));
     }
     std::vector<double> clipPupil;
-    long events = 0, found = 0, open = 0, openClosed = 0, labelledClosed = 0;
+    long events = 0, found = 0, open = 0, openClosed = 0, labelledClosed = 0, teacherDisagrees = 0, teacherDisagreesClosed = 0;
     std::array<std::vector<int>, 2> misread;  // per eye: open frames read as closed
     for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
-        const std::set<int>& closed = closedByEye[e == gaze::Eye::Left ? 0 : 1];
+        const std::size_t side = e == gaze::Eye::Left ? 0 : 1;
+        const std::set<int>& closed = closedByEye[side];
         std::vector<double> apertures;
         for (const auto& f : frames)
             if (f.teacher) apertures.push_back(f.teacher->eye(e).aperture());
@@ -133,13 +141,20 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
                     ++labelledClosed;
                     continue;
                 }
+                // Lids the teacher places open, which its own blendshapes read as closed: lowered
+                // lids, a squint; the teacher does not call them open, so neither does this measure.
+                if (f.blendshapes && (*f.blendshapes)[blinkIndex(e)] >= 0.5f) {
+                    ++teacherDisagrees;
+                    teacherDisagreesClosed += blinks(i);
+                    continue;
+                }
                 const Landmarks68& l = *f.face->landmarks;
                 const double corners = std::hypot(l[45].x - l[36].x, l[45].y - l[36].y);
                 const Point2 p = eyeOf(*f.face->gaze, e).pupil_px, c = f.teacher->eye(e).iris_centre;
                 clipPupil.push_back(std::hypot(p.x - c.x, p.y - c.y) / corners);
                 ++open;
                 openClosed += blinks(i);
-                if (blinks(i)) misread[e == gaze::Eye::Left ? 0 : 1].push_back(static_cast<int>(i));
+                if (blinks(i)) misread[side].push_back(static_cast<int>(i));
             }
         }
         // Closed events: runs below half the median; found when eyeBlink >= 0.5 within the run (+-1 frame).
@@ -167,6 +182,11 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
         events ? static_cast<double>(found) / events : std::nan(""), open ? 100.0 * openClosed / open : 0.0, openClosed, open);
     if (labelledClosed > 0)
         std::printf("    %ld eye frames the teacher reads open are labelled closed by eye: not counted as open\n", labelledClosed);
+    if (teacherDisagrees > 0)
+        std::printf(
+            "    %ld eye frames with the teacher's lids open read eyeBlink >= 0.5 by its blendshapes: not counted as open "
+            "(we read %ld of them as closed)\n",
+            teacherDisagrees, teacherDisagreesClosed);
     for (int e = 0; e < 2; ++e)
         if (!misread[static_cast<std::size_t>(e)].empty())
             std::printf("    read as closed, %s eye: frames %s\n", e == 0 ? "left" : "right",
@@ -250,7 +270,8 @@ void eval300W(const std::string& shared, tools::Split split, const Models& model
 }  // namespace
 
 int runEvalGaze(const std::vector<std::string>& argv) {
-    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic", "--labels"}), trackingFlags({"--help", "--bare-faces"}));
+    const Args args(argv, trackingOptions({"--clips", "--split", "--synthetic", "--labels", "--blendshapes"}),
+                    trackingFlags({"--help", "--bare-faces"}));
     if (args.has("--help")) {
         std::puts(kUsage);
         return 0;
@@ -268,13 +289,16 @@ int runEvalGaze(const std::vector<std::string>& argv) {
     const auto clips = tools::splitList(args.get("--clips", "liveportrait_d14_gaze_shifts.mp4,fgnet_talking_face_franck.mp4"));
     if (!clips.empty()) {
         const auto teacher = tools::readTeacher(shared + "/data/teacher/clips_iris.jsonl");
+        const std::string blendshapesPath = args.get("--blendshapes", shared + "/data/teacher/clips_blendshapes.csv");
+        const auto blendshapes = blendshapesPath == "none" ? std::map<std::string, tools::BlendshapeScores>{}
+                                                           : tools::readBlendshapeTeacher(blendshapesPath);
         const ClosedByEye closed = readClosedByEye(labelsPath(args));
         std::vector<double> pupil, recall, openClosed;
         std::printf("clips (teacher: MediaPipe iris + eyelids):\n");
         for (const auto& clip : clips) {
             const auto labelled = closed.find(std::filesystem::path(clip).filename().string());
-            evalClip(shared, clip, teacher, labelled == closed.end() ? std::array<std::set<int>, 2>{} : labelled->second, models, config,
-                     pupil, recall, openClosed);
+            evalClip(shared, clip, teacher, blendshapes, labelled == closed.end() ? std::array<std::set<int>, 2>{} : labelled->second,
+                     models, config, pupil, recall, openClosed);
         }
         std::printf(
             "clips together: pupil error mean %.4f p95 %.4f; blink recall (mean over clips) %.2f; "
