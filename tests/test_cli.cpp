@@ -422,6 +422,7 @@ TEST(Cli, EvalGazeDoesNotCallOpenTheEyesTheBlendshapeTeacherReadsAsClosed) {
     EXPECT_EQ(lidsAlone.out.find("by its blendshapes"), std::string::npos) << lidsAlone.out;
     EXPECT_GT(openReadAsClosed(lidsAlone.out), 50.0) << lidsAlone.out;
     EXPECT_LT(openReadAsClosed(both.out), 40.0) << both.out;
+    EXPECT_NE(both.out.find("above 2 % on 1 of 1 clips: lrs3_QoT0S2vu9m4_00002.mp4 "), std::string::npos) << both.out;
 }
 
 TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {
