@@ -425,6 +425,26 @@ TEST(Cli, EvalGazeDoesNotCallOpenTheEyesTheBlendshapeTeacherReadsAsClosed) {
     EXPECT_NE(both.out.find("above 2 % on 1 of 1 clips: lrs3_QoT0S2vu9m4_00002.mp4 "), std::string::npos) << both.out;
 }
 
+TEST(Cli, EvalGazeListsTheClosedEventsItDidNotFind) {
+    FACETRACK_REQUIRE_SHARED();
+    if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
+    // A short clip of a man with glasses whose blinks the tracker mostly misses: every missed
+    // event is listed, one run of frames each.
+    const CliRun run = runCli("eval-gaze --clips lrs3_0Fi83BHQsMA_00002.mp4 --split none --synthetic 0");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    std::smatch counts;
+    ASSERT_TRUE(std::regex_search(run.out, counts, std::regex("blink events (\\d+), found (\\d+)"))) << run.out;
+    const int missedEvents = std::stoi(counts[1]) - std::stoi(counts[2]);
+    EXPECT_GT(missedEvents, 0) << run.out;
+    int listed = 0;
+    const std::regex listing("closed events not found, (left|right) eye: frames ([0-9, -]+)");
+    for (auto it = std::sregex_iterator(run.out.begin(), run.out.end(), listing); it != std::sregex_iterator(); ++it) {
+        const std::string runs = (*it)[2];
+        listed += 1 + static_cast<int>(std::count(runs.begin(), runs.end(), ','));
+    }
+    EXPECT_EQ(listed, missedEvents) << run.out;
+}
+
 TEST(Cli, EvalLandmarksReportsTheBoxNmeByYawFromAPosesFile) {
     FACETRACK_REQUIRE_SHARED();
     // A large-pose set as make_profiled_faces writes one: grey PGM images, .pts, poses.csv.

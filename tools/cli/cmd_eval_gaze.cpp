@@ -45,11 +45,12 @@ The gaze stage against MediaPipe's iris and eyelid predictions (teacher labels, 
   pupil    pupil centre vs the teacher's iris centre, open eyes only (aperture >= 0.8 of the
            clip's median), over the outer-eye-corner distance: mean and p95
   blink    per clip and eye, closed events (runs with the teacher's aperture below half the clip's
-           median): the share with eyeBlink >= 0.5 in the run (recall); and the share of clearly open
-           frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5, and those frames. Frames
-           --labels (default data/expression_labels.csv) marks closed by eye (blink, eyes_closed,
-           wink_left, wink_right) are not open, whatever the teacher reads; nor are frames the
-           blendshape teacher reads eyeBlink >= 0.5 (--blendshapes, default ../shared/data/teacher/
+           median): the share with eyeBlink >= 0.5 in the run (recall), and those missed; the share
+           of clearly open frames (aperture >= 0.8 of the median) with eyeBlink >= 0.5, and those
+           frames; and the clips above the 2 % target. Frames --labels (default
+           data/expression_labels.csv) marks closed by eye (blink, eyes_closed, wink_left,
+           wink_right) are not open, whatever the teacher reads; nor are frames the blendshape
+           teacher reads eyeBlink >= 0.5 (--blendshapes, default ../shared/data/teacher/
            clips_blendshapes.csv; none: the lids alone decide)
   synthetic  N renders of the face model with a textured iris at known gaze (see docs/gaze.md):
            angular error by inter-ocular bin, mean and p95; the mean signed error (bias) and the
@@ -120,7 +121,7 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
     }
     std::vector<double> clipPupil;
     long events = 0, found = 0, open = 0, openClosed = 0, labelledClosed = 0, teacherDisagrees = 0, teacherDisagreesClosed = 0;
-    std::array<std::vector<int>, 2> misread;  // per eye: open frames read as closed
+    std::array<std::vector<int>, 2> misread, missed;  // per eye: open frames read as closed; the frames of closed events not found
     for (const gaze::Eye e : {gaze::Eye::Left, gaze::Eye::Right}) {
         const std::size_t side = e == gaze::Eye::Left ? 0 : 1;
         const std::set<int>& closed = closedByEye[side];
@@ -169,6 +170,7 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
             for (std::size_t k = i > 0 ? i - 1 : 0; k < std::min(end + 1, frames.size()); ++k) hit = hit || blinks(k);
             ++events;
             found += hit;
+            for (std::size_t k = i; !hit && k < end; ++k) missed[side].push_back(static_cast<int>(k));
             i = end;
         }
     }
@@ -187,10 +189,10 @@ void evalClip(const std::string& shared, const std::string& clip, const std::map
             "    %ld eye frames with the teacher's lids open read eyeBlink >= 0.5 by its blendshapes: not counted as open "
             "(we read %ld of them as closed)\n",
             teacherDisagrees, teacherDisagreesClosed);
-    for (int e = 0; e < 2; ++e)
-        if (!misread[static_cast<std::size_t>(e)].empty())
-            std::printf("    read as closed, %s eye: frames %s\n", e == 0 ? "left" : "right",
-                        frameRuns(misread[static_cast<std::size_t>(e)]).c_str());
+    for (const auto& [what, frames] : {std::pair{"read as closed", &misread}, std::pair{"closed events not found", &missed}})
+        for (std::size_t e = 0; e < 2; ++e)
+            if (!(*frames)[e].empty())
+                std::printf("    %s, %s eye: frames %s\n", what, e == 0 ? "left" : "right", frameRuns((*frames)[e]).c_str());
 }
 
 void eval300W(const std::string& shared, tools::Split split, const Models& models, const TrackerConfig& config) {
