@@ -359,7 +359,7 @@ namespace {
 
 TEST(Cli, EvalGazeSeparatesTheFitsErrorFromTheGeometrysOnRenders) {
     FACETRACK_REQUIRE_SHARED();
-    if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
+    FACETRACK_REQUIRE_EYE_MODEL();
     // In a folder of its own: eval-gaze writes the first renders where it runs.
     const std::string dir = test::tempPath("eval_gaze");
     std::filesystem::create_directories(dir);
@@ -389,7 +389,7 @@ double openReadAsClosed(const std::string& out) {
 
 TEST(Cli, EvalGazeTakesEyesLabelledClosedByEyeAsClosedWhateverTheTeacherReads) {
     FACETRACK_REQUIRE_SHARED();
-    if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
+    FACETRACK_REQUIRE_EYE_MODEL();
     // Michael Rosen closes his eyes for two seconds (frames 19-48); the teacher reads many of
     // those frames open, so without the labels the tracker's closed eyes count as misread (the
     // lids alone decide: the blendshape teacher reads some of those frames closed).
@@ -409,7 +409,7 @@ TEST(Cli, EvalGazeTakesEyesLabelledClosedByEyeAsClosedWhateverTheTeacherReads) {
 
 TEST(Cli, EvalGazeDoesNotCallOpenTheEyesTheBlendshapeTeacherReadsAsClosed) {
     FACETRACK_REQUIRE_SHARED();
-    if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
+    FACETRACK_REQUIRE_EYE_MODEL();
     // A man reading from notes, lids lowered all clip long: against the clip's median the
     // teacher's lids are open, while its blendshapes read his right eye as closed (eyeBlinkRight
     // 0.5-0.7) on most frames, as the tracker does.
@@ -427,7 +427,7 @@ TEST(Cli, EvalGazeDoesNotCallOpenTheEyesTheBlendshapeTeacherReadsAsClosed) {
 
 TEST(Cli, EvalGazeListsTheClosedEventsItDidNotFind) {
     FACETRACK_REQUIRE_SHARED();
-    if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm")) GTEST_SKIP() << "models/eye_model.ftm is missing";
+    FACETRACK_REQUIRE_EYE_MODEL();
     // A short clip of a man with glasses whose blinks the tracker mostly misses: every missed
     // event is listed, one run of frames each.
     const CliRun run = runCli("eval-gaze --clips lrs3_0Fi83BHQsMA_00002.mp4 --split none --synthetic 0");

@@ -39,12 +39,6 @@ constexpr float kDeg = 3.14159265f / 180.f;
 /// placement (without the corner cascade: 15), not only a flipped axis.
 constexpr double kRenderGazeToleranceDeg = 7.0;
 
-#define FACETRACK_REQUIRE_EYE_MODEL()                                                            \
-    do {                                                                                         \
-        if (!std::filesystem::exists(test::sourceDir() + "/models/eye_model.ftm"))               \
-            GTEST_SKIP() << "models/eye_model.ftm is missing (build/tools/train_eyes makes it)"; \
-    } while (0)
-
 TEST(EyePatch, PutsTheCornersAtFixedPointsAndMirrorsTheLeftEye) {
     cv::Mat gray(200, 300, CV_8U, cv::Scalar(100));
     cv::circle(gray, {120, 90}, 3, cv::Scalar(250), -1);  // a bright dot near the outer corner of a right eye

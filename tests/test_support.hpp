@@ -31,6 +31,13 @@ inline std::string sharedDir() { return core::sharedDirectory(); }
 
 inline std::string sourceDir() { return FACETRACK_TEST_SOURCE_DIR; }
 
+/// Skips the calling test when the repository has no eye model (models/eye_model.ftm).
+#define FACETRACK_REQUIRE_EYE_MODEL()                                                            \
+    do {                                                                                         \
+        if (!std::filesystem::exists(::facetrack::test::sourceDir() + "/models/eye_model.ftm"))  \
+            GTEST_SKIP() << "models/eye_model.ftm is missing (build/tools/train_eyes makes it)"; \
+    } while (0)
+
 /// 300-W's lfpw test faces image_0001 .. image_00NN that exist: their number and their path
 /// without the extension (".jpg" the image, ".pts" its 68 points).
 struct LfpwTestFace {

@@ -296,8 +296,7 @@ int runEvalGaze(const std::vector<std::string>& argv) {
                                                            : tools::readBlendshapeTeacher(blendshapesPath);
         const ClosedByEye closed = readClosedByEye(labelsPath(args));
         std::vector<double> pupil, recall, openClosed;
-        std::string overTarget;  // the clips whose open eyes read as closed more often than the 2 % target
-        int clipsOver = 0;
+        std::vector<std::string> overTarget;  // the clips whose open eyes read as closed more often than the 2 % target
         std::printf("clips (teacher: MediaPipe iris + eyelids):\n");
         for (const auto& clip : clips) {
             const auto labelled = closed.find(std::filesystem::path(clip).filename().string());
@@ -307,13 +306,16 @@ int runEvalGaze(const std::vector<std::string>& argv) {
             if (openClosed.size() > before && openClosed.back() > 0.02) {
                 char rate[32];
                 std::snprintf(rate, sizeof rate, " %.1f %%", 100.0 * openClosed.back());
-                overTarget += (clipsOver++ ? ", " : ": ") + clip + rate;
+                overTarget.push_back(clip + rate);
             }
         }
+        std::string named;
+        for (const auto& c : overTarget) named += (named.empty() ? ": " : ", ") + c;
         std::printf(
             "clips together: pupil error mean %.4f p95 %.4f; blink recall (mean over clips) %.2f; "
-            "open frames read as closed %.2f %%, above 2 %% on %d of %zu clips%s\n",
-            mean(pupil), percentile(pupil, 0.95), mean(recall), 100.0 * mean(openClosed), clipsOver, openClosed.size(), overTarget.c_str());
+            "open frames read as closed %.2f %%, above 2 %% on %zu of %zu clips%s\n",
+            mean(pupil), percentile(pupil, 0.95), mean(recall), 100.0 * mean(openClosed), overTarget.size(), openClosed.size(),
+            named.c_str());
     }
     if (split != "none") eval300W(shared, tools::parseSplit(split), models, config);
     if (synthetic > 0) evalSyntheticGaze(synthetic, models, config, args.has("--bare-faces"));
