@@ -425,6 +425,17 @@ TEST(Cli, EvalGazeDoesNotCallOpenTheEyesTheBlendshapeTeacherReadsAsClosed) {
     EXPECT_NE(both.out.find("above 2 % on 1 of 1 clips: lrs3_QoT0S2vu9m4_00002.mp4 "), std::string::npos) << both.out;
 }
 
+TEST(Cli, EvalGazeNamesTheLineOfABlendshapeTeacherRowThatIsNotNumbers) {
+    FACETRACK_REQUIRE_SHARED();
+    FACETRACK_REQUIRE_EYE_MODEL();
+    const std::string bad = test::tempPath("bad_blendshapes.csv");
+    std::ofstream(bad) << "clip,frame,face,eyeBlinkLeft\nhellomeme_nice.mp4,0,1,0.2\nhellomeme_nice.mp4,1,1,zz\n";
+    const CliRun run = runCli("eval-gaze --clips hellomeme_nice.mp4 --split none --synthetic 0 --blendshapes '" + bad + "'");
+    std::filesystem::remove(bad);
+    EXPECT_EQ(run.exit_code, 1);
+    EXPECT_NE(run.err.find("line 3: 'zz' in column 'eyeBlinkLeft' is not a number"), std::string::npos) << run.err;
+}
+
 TEST(Cli, EvalGazeListsTheClosedEventsItDidNotFind) {
     FACETRACK_REQUIRE_SHARED();
     FACETRACK_REQUIRE_EYE_MODEL();
