@@ -37,7 +37,8 @@ std::map<std::string, BlendshapeScores> readBlendshapeTeacher(const std::string&
     for (int row = 2; std::getline(in, line); ++row) {
         const std::vector<std::string> f = split(line);
         if (f.size() > face && f[face] == "0") continue;  // no face found: no scores
-        if (f.size() != header.size()) throw Error(path + ": a row without " + std::to_string(header.size()) + " fields");
+        if (f.size() != header.size())
+            throw Error(path + ", line " + std::to_string(row) + ": a row without " + std::to_string(header.size()) + " fields");
         const auto number = [&](std::size_t c) {
             char* end = nullptr;
             const float v = std::strtof(f[c].c_str(), &end);
