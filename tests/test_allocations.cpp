@@ -170,6 +170,7 @@ TEST(Allocations, NonePerTrackedFrameWithACascade) {
     cascade.geometry_reported.clear();
     cascade.geometry_neutral.clear();
     cascade.geometry_full.clear();
+    cascade.lip_net.clear();
     cascade.stages.assign(1, {2, test::fixtureBytes("cnn_parity.onnx")});
     cascade.landmark_net = test::fixtureBytes("cnn_landmarks_fixture.onnx");
     const std::string path = test::tempPath("cascade_allocations.ftm");

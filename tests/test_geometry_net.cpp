@@ -1,9 +1,10 @@
 // The expression stage's geometry net (expression/geometry_net.hpp): its features do not change
 // when the face moves, scales or rolls in the image; the mirror image's features and readings are
-// the face's with left and right swapped; the file stores it, refuses a damaged one; the shipped
-// file reads the shapes pack_cnn chose from it.
+// the face's with left and right swapped, the lips' too; the file stores it and the lip net, refuses
+// a damaged one; the shipped file reads the shapes pack_cnn chose from it.
 
 #include "expression/geometry_net.hpp"
+#include "expression/lip_net.hpp"
 #include "facetrack/error.hpp"
 #include "facetrack/tracker.hpp"
 #include "model/internals.hpp"
@@ -132,6 +133,61 @@ TEST(CnnModelFile, HoldsAGeometryNetBesideTheCascadeAndRefusesABadOne) {
     EXPECT_THROW(nn::writeCnnModel(test::tempPath("bad.ftm"), bad), Error);
     bad = m;
     bad.geometry_net.clear();  // readings without the net
+    EXPECT_THROW(nn::writeCnnModel(test::tempPath("bad.ftm"), bad), Error);
+}
+
+TEST(GeometryNet, ReadsTheLipsAndAFaceAndItsMirrorImageAlike) {
+    const std::vector<std::string> names = {"mouthPress_L", "mouthPucker", "mouthPress_R"};
+    expression::GeometryNet net(someLayers({nn::kGeometryFeatures + 2 * nn::kLipPoints, 16, 3}, 3), names);
+    ASSERT_TRUE(net.readsLips());
+    const core::Shape68 face = someFace(4);
+    const core::Shape68 mirror = mirrorImage(face);
+    std::mt19937 rng(5);
+    std::normal_distribution<float> normal(0.f, 0.3f);
+    expression::LipPoints lips;
+    for (float& v : lips.reshaped()) v = normal(rng);
+    const Eigen::VectorXf w = net.predict(face, 0.0, 12.0, &lips);
+    const expression::LipPoints mirroredLips = expression::mirroredLips(lips);
+    const Eigen::VectorXf m = net.predict(mirror, 0.0, -12.0, &mirroredLips);
+    EXPECT_NEAR(m[0], w[2], 1e-5f);
+    EXPECT_NEAR(m[1], w[1], 1e-5f);
+    // the lips count
+    expression::LipPoints pursed = lips;
+    pursed.row(0) *= 0.7f;
+    EXPECT_GT((net.predict(face, 0.0, 12.0, &pursed) - w).cwiseAbs().maxCoeff(), 1e-3f);
+    EXPECT_THROW(net.predict(face, 0.0, 12.0), Error);  // a net that reads the lips needs them
+    EXPECT_THROW(expression::GeometryNet(someLayers({nn::kGeometryFeatures + 3, 2}, 6), {"jawOpen", "mouthClose"}), Error);
+}
+
+TEST(CnnModelFile, HoldsALipNetBesideTheGeometryNetAndRefusesABadOne) {
+    nn::CnnModelData m;
+    m.expressions = {"jawOpen"};
+    m.stages.push_back({1, test::fixtureBytes("cnn_parity.onnx")});
+    m.expressions_only = true;
+    m.geometry_net = someLayers({nn::kGeometryFeatures + 2 * nn::kLipPoints, 8, 1}, 7);
+    m.geometry_reported = {true};
+    m.geometry_neutral = {0.1f};
+    m.geometry_full = {0.9f};
+    m.lip_net = test::fixtureBytes("lip_fixture.onnx");
+    m.lip_patch_size = 64;
+    m.lip_patch_half = 0.75f;
+    const std::string path = test::tempPath("cascade_lips.ftm");
+    nn::writeCnnModel(path, m);
+    const nn::CnnModelData back = nn::readCnnModel(path);
+    EXPECT_EQ(back.lip_net, m.lip_net);
+    EXPECT_EQ(back.lip_patch_size, 64);
+    EXPECT_EQ(back.lip_patch_half, 0.75f);
+    nn::CnnModelData bad = m;
+    bad.lip_net.clear();  // a geometry net reading lips nobody reads
+    EXPECT_THROW(nn::writeCnnModel(test::tempPath("bad.ftm"), bad), Error);
+    bad = m;
+    bad.lip_patch_half = 0.f;
+    EXPECT_THROW(nn::writeCnnModel(test::tempPath("bad.ftm"), bad), Error);
+    bad = m;
+    bad.geometry_net.clear();
+    bad.geometry_reported.clear();
+    bad.geometry_neutral.clear();
+    bad.geometry_full.clear();  // a lip net without the geometry net
     EXPECT_THROW(nn::writeCnnModel(test::tempPath("bad.ftm"), bad), Error);
 }
 

@@ -113,3 +113,30 @@ with torch.no_grad():
     mirror[2].weight[6].view(64, 64)[:, :32] = 0.1 / (64 * 32)
 export_onnx(mirror, (1, 1, 64, 64), os.path.join(out, "mirror_fixture.onnx"), "update")
 print(f"wrote {out}/mirror_fixture.onnx")
+
+# The lip net's geometry (tests/test_lip_net.cpp): a face's 68 points (a grid with the eyes apart, rolled
+# by 0.2 rad) and the mouth patch map train_lips.py cuts for them, "A00 A01 t0 A10 A11 t1"
+# (mouth_patch_fixture.txt); and a lip net of batch 2 whose 80 outputs are constant, every point at
+# (+0.25, +0.5) (lip_fixture.onnx): read with its mirror image, x averages to 0.
+from tools.train.expression.train_lips import patch_map, SIZE
+rng = np.random.default_rng(5)
+face = np.stack([200 + 3.0 * (np.arange(68) % 17), 150 + 2.0 * (np.arange(68) // 17)], 1) + rng.uniform(-4, 4, (68, 2))
+face[36:42] = [170, 140] + rng.uniform(-4, 4, (6, 2))
+face[42:48] = [230, 140] + rng.uniform(-4, 4, (6, 2))
+roll = np.array([[np.cos(0.2), -np.sin(0.2)], [np.sin(0.2), np.cos(0.2)]])
+face = face @ roll.T
+A, t, _ = patch_map(face)
+with open(os.path.join(out, "mouth_patch_fixture.txt"), "w") as f:
+    f.write(" ".join(f"{v:.9g}" for v in face.reshape(-1)) + "\n")
+    f.write(" ".join(f"{v:.9g}" for v in (A[0, 0], A[0, 1], t[0], A[1, 0], A[1, 1], t[1])) + "\n")
+print(f"wrote {out}/mouth_patch_fixture.txt")
+lips = torch.nn.Sequential(*[layer for k in range(4) for layer in (torch.nn.Conv2d(1, 1, 3, 2, 1), torch.nn.ReLU())],
+                           torch.nn.Flatten(), torch.nn.Linear((SIZE // 16) ** 2, 80))
+with torch.no_grad():
+    for k, conv in enumerate(m for m in lips if isinstance(m, torch.nn.Conv2d)):
+        conv.weight.fill_(0.01 * (k + 1))  # distinct, or the exporter merges them into nodes OpenCV does not load
+        conv.bias.fill_(0.1 * (k + 1))
+    lips[-1].weight.zero_()
+    lips[-1].bias.copy_(torch.tensor([0.25, 0.5] * 40))
+export_onnx(lips, (2, 1, SIZE, SIZE), os.path.join(out, "lip_fixture.onnx"), "lips")
+print(f"wrote {out}/lip_fixture.onnx")

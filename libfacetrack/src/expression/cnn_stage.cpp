@@ -3,6 +3,7 @@
 #include "core/shape2d.hpp"
 #include "expression/geometry_net.hpp"
 #include "expression/landmark_net.hpp"
+#include "expression/lip_net.hpp"
 #include "expression/update_net.hpp"
 #include "facetrack/error.hpp"
 #include "fit/fit_basis.hpp"
@@ -36,6 +37,8 @@ public:
                                "CNN cascade '" + cascade_->sourcePath() + "' stage " + std::to_string(i + 1), mirror_ ? 2 : 1);
         }
         if (!d.geometry_net.empty()) geometry_net_.emplace(d.geometry_net, d.expressions);
+        if (!d.lip_net.empty())
+            lip_net_.emplace(d.lip_net, d.lip_patch_size, d.lip_patch_half, "CNN cascade '" + cascade_->sourcePath() + "' lip net");
         if (cascade_->hasLandmarkNet()) {
             landmark_basis_ = landmarkBasis(*face_, layout_.anchors.expressions);
             landmark_net_.emplace(d.landmark_net, d.patch_size, kLandmarkOutputs,
@@ -56,7 +59,9 @@ public:
                                 : "") +
                     std::to_string(nets_.size()) + " stage(s), " + rounds + " rounds, " + std::to_string(layout_.size) + " px patch, " +
                     std::to_string(layout_.anchors.expressions.size()) + " expressions" + (mirror_ ? ", mirror-averaged" : "") +
-                    (geometry_net_ ? ", " + std::to_string(geometryCount()) + " read from the landmarks' geometry" : "") +
+                    (geometry_net_ ? ", " + std::to_string(geometryCount()) + " read from the landmarks' geometry" +
+                                         (lip_net_ ? " and the lip net's points" : "")
+                                   : "") +
                     (landmark_net_ ? ", landmark net" : "") + "; nets on the " + nets_.front().engineName() + " (" +
                     cascade_->sourcePath() + ")"};
     }
@@ -125,7 +130,7 @@ public:
             }
             native[static_cast<std::size_t>(layout_.anchors.expressions[static_cast<std::size_t>(k)])] = w;
         }
-        if (geometry_net_ && r.landmarks) readGeometry(*r.landmarks, r.pose->euler_deg, native);
+        if (geometry_net_ && r.landmarks) readGeometry(frame.gray, *r.landmarks, r.pose->euler_deg, native);
         r.expression->arkit = face_->toArkit(native);
         if (landmark_net_) moveLandmarks(frame, face, s);
         return Outcome::Ok;
@@ -145,11 +150,15 @@ private:
         return static_cast<int>(std::count(g.begin(), g.end(), true));
     }
 
-    /// The geometry net's readings (geometry_net.hpp) in place of the texture's, for the expressions
-    /// the file reads from the geometry, each between its own neutral and full readings.
-    void readGeometry(const Landmarks68& landmarks, const Vec3& eulerDeg, std::vector<float>& native) {
+    /// The geometry net's readings (geometry_net.hpp; with the lip net's points, lip_net.hpp) in
+    /// place of the texture's, for the expressions the file reads from the geometry, each between
+    /// its own neutral and full readings.
+    void readGeometry(const cv::Mat& gray, const Landmarks68& landmarks, const Vec3& eulerDeg, std::vector<float>& native) {
         const nn::CnnModelData& d = model::dataOf(*cascade_);
-        const Eigen::VectorXf& g = geometry_net_->predict(core::fromLandmarks68(landmarks), eulerDeg.x, eulerDeg.y);
+        const core::Shape68 points = core::fromLandmarks68(landmarks);
+        const LipPoints* lips = lip_net_ ? &lip_net_->predict(gray, points) : nullptr;
+        if (lips && !lips->allFinite()) return;
+        const Eigen::VectorXf& g = geometry_net_->predict(points, eulerDeg.x, eulerDeg.y, lips);
         if (!g.allFinite()) return;
         for (const Reported& r : reported_) {
             const auto k = static_cast<std::size_t>(r.position);
@@ -183,6 +192,7 @@ private:
     std::optional<nn::PatchNet> landmark_net_;
     std::optional<UpdateMirror> mirror_;
     std::optional<GeometryNet> geometry_net_;
+    std::optional<LipNet> lip_net_;
     struct Reported {
         int position;  ///< in the layout's expressions
         /// Read between its neutral and full readings: a reading, or a correction of the fit's

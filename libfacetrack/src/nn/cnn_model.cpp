@@ -17,11 +17,13 @@ constexpr int kMaxStages = 8, kMaxRounds = 8;
 
 void validateGeometry(const CnnModelData& m, const std::string& what) {
     if (m.geometry_net.empty()) {
-        if (!m.geometry_reported.empty() || !m.geometry_neutral.empty() || !m.geometry_full.empty())
-            throw Error(what + ": corrupt: geometry readings without the geometry net");
+        if (!m.geometry_reported.empty() || !m.geometry_neutral.empty() || !m.geometry_full.empty() || !m.lip_net.empty())
+            throw Error(what + ": corrupt: geometry readings or a lip net without the geometry net");
         return;
     }
-    int inputs = kGeometryFeatures;
+    if (!m.lip_net.empty() && (m.lip_patch_size < 16 || m.lip_patch_size > 256 || !(m.lip_patch_half > 0.f && m.lip_patch_half <= 4.f)))
+        throw Error(what + ": corrupt: the lip net's patch");
+    int inputs = kGeometryFeatures + (m.lip_net.empty() ? 0 : 2 * kLipPoints);
     for (const DenseLayer& l : m.geometry_net) {
         if (l.cols != inputs || l.rows < 1 || l.rows > 4096 || l.weight.size() != static_cast<std::size_t>(l.rows) * l.cols ||
             l.bias.size() != static_cast<std::size_t>(l.rows))
@@ -112,6 +114,9 @@ void writeCnnModel(const std::string& path, const CnnModelData& m) {
             w.put<float>(m.geometry_full[k]);
         }
     }
+    w.putString(m.lip_net);
+    w.put<std::int32_t>(m.lip_patch_size);
+    w.put<float>(m.lip_patch_half);
     core::writeModelFile(path, kCnnModelMagic, kCnnModelVersion, w.bytes());
 }
 
@@ -197,6 +202,11 @@ CnnModelData readCnnModel(const std::string& path) {
                 m.geometry_full.push_back(r.get<float>());
             }
         }
+    }
+    if (version >= 11) {
+        m.lip_net = r.getString();
+        m.lip_patch_size = r.get<std::int32_t>();
+        m.lip_patch_half = r.get<float>();
     }
     r.expectEnd();
     validate(m, what);

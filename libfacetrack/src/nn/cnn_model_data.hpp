@@ -15,6 +15,9 @@ struct CnnStageData {
 /// The geometry net's inputs (expression/geometry_net.hpp): the 68 normalised points' x and y, then
 /// sin(pitch) and sin(yaw).
 constexpr int kGeometryFeatures = 2 * 68 + 2;
+/// The lip net's points (expression/lip_net.hpp): 40 of MediaPipe Face Landmarker's mesh, whose
+/// x and y the geometry net reads after its own features when the file has a lip net.
+constexpr int kLipPoints = 40;
 
 /// A dense layer, y = W x + b, W `rows` x `cols` row-major.
 struct DenseLayer {
@@ -64,6 +67,12 @@ struct CnnModelData {
     /// labels on the validation people. Each is read between its own neutral and full readings below.
     std::vector<bool> geometry_reported;
     std::vector<float> geometry_neutral, geometry_full;
+    /// The lip net (expression/lip_net.hpp; format version 11): ONNX bytes of a net of batch 2 from a
+    /// mouth patch of `lip_patch_size` pixels spanning 2 `lip_patch_half` normalised units to the 40
+    /// lip points; empty: none. With it the geometry net's inputs are its own and the points' x, y.
+    std::string lip_net;
+    int lip_patch_size = 64;
+    float lip_patch_half = 0.75f;
     /// The final net, the 68 landmarks' displacements (landmark_net.hpp): ONNX bytes, or empty for none.
     std::string landmark_net;
     std::string provenance;
@@ -72,7 +81,7 @@ struct CnnModelData {
 constexpr char kCnnModelMagic[] = "FTCNNCAS";
 /// Versions 4-9 also held the landmark refiner, now a file of its own (refiner_model_data.hpp):
 /// the reader skips it.
-constexpr std::uint32_t kCnnModelVersion = 10;
+constexpr std::uint32_t kCnnModelVersion = 11;
 
 void writeCnnModel(const std::string& path, const CnnModelData& model);
 

@@ -41,48 +41,89 @@ def read_splits(path="data/clip_splits.csv"):
         return {r["clip"]: r["split"] for r in csv.DictReader(line for line in f if not line.startswith("#"))}
 
 
-def features(points, pitch_deg, yaw_deg):
-    """points (N, 68, 2) pixels, pitch and yaw (N,) degrees -> (N, 138)."""
-    c = points - points.mean(1, keepdims=True)
+def normalising_frame(points):
+    """Per face of points (N, 68, 2): the centre c (N, 2), the rotation R(-theta) (N, 2, 2) that levels the line
+    between the eyes' centres, and the root-mean-square distance s (N,) of the levelled points from c."""
+    c = points.mean(1)
     d = points[:, 42:48].mean(1) - points[:, 36:42].mean(1)
     angle = np.arctan2(d[:, 1], d[:, 0])
-    cos, sin = np.cos(-angle)[:, None], np.sin(-angle)[:, None]
-    x = cos * c[:, :, 0] - sin * c[:, :, 1]
-    y = sin * c[:, :, 0] + cos * c[:, :, 1]
-    scale = np.sqrt((x ** 2 + y ** 2).mean(1, keepdims=True))
-    flat = np.stack([x / scale, y / scale], 2).reshape(len(points), -1)
-    return np.concatenate([flat, np.sin(np.radians(pitch_deg))[:, None], np.sin(np.radians(yaw_deg))[:, None]], 1).astype(np.float32)
+    cos, sin = np.cos(angle), np.sin(angle)
+    unroll = np.stack([np.stack([cos, sin], 1), np.stack([-sin, cos], 1)], 1)
+    s = np.sqrt(((points - c[:, None]) ** 2).sum(2).mean(1))
+    return c, unroll, s
 
 
-def mirrored(points, pitch_deg, yaw_deg):
-    """The mirror image's points and pose: x negated, points renumbered, yaw negated."""
+def normalised(p, c, unroll, s):
+    """Points p (N, K, 2) in the frame of normalising_frame: R(-theta) (p - c) / s."""
+    return np.einsum("nij,nkj->nki", unroll, p - c[:, None]) / s[:, None, None]
+
+
+def features(points, pitch_deg, yaw_deg, lips=None):
+    """points (N, 68, 2) pixels, pitch and yaw (N,) degrees -> (N, 138); with lips (N, 40, 2), the lip net's
+    points already in the normalised frame, (N, 218)."""
+    q = normalised(points, *normalising_frame(points))
+    parts = [q.reshape(len(points), -1), np.sin(np.radians(pitch_deg))[:, None], np.sin(np.radians(yaw_deg))[:, None]]
+    if lips is not None:
+        parts.append(lips.reshape(len(points), -1))
+    return np.concatenate(parts, 1).astype(np.float32)
+
+
+def mirrored(points, pitch_deg, yaw_deg, lips=None):
+    """The mirror image's points, pose (and lip points): x negated, points renumbered, yaw negated. The
+    normalised frame of the mirror image is the mirror of the face's, so normalised lips mirror alike."""
     flipped = points[:, MIRROR].copy()
     flipped[:, :, 0] *= -1
-    return flipped, pitch_deg, -yaw_deg
+    if lips is None:
+        return flipped, pitch_deg, -yaw_deg
+    from tools.train.expression.train_lips import LIPS_MIRROR
+    flipped_lips = lips[:, LIPS_MIRROR].copy()
+    flipped_lips[:, :, 0] *= -1
+    return flipped, pitch_deg, -yaw_deg, flipped_lips
 
 
-def read_tracked(path, key_of, teacher, names):
-    """The tracked lines of a `facetrack track --raw` file that the teacher read: ((points, pitch,
-    yaw), targets), or None; key_of(line number, record) is the teacher's key of a line."""
-    points, pitch, yaw, targets = [], [], [], []
+def with_lips(sets, lips, which):
+    """The sets (part, targets, keys) with each sample's lip points (train_lips.py's OUT.npz) added to its
+    part: the teacher's for training, where it has them, else the lip net's; samples without them dropped."""
+    index = {k: i for i, k in enumerate(lips[which + "_keys"])}
+    net, teacher = lips[which + "_net"], lips[which + "_teacher"]
+    out = []
+    for part, targets, keys in sets:
+        rows = np.array([index.get(k, -1) for k in keys])
+        keep = rows >= 0
+        points = np.where(np.isnan(teacher[rows]), net[rows], teacher[rows]) if which == "train" else net[rows]
+        out.append((tuple(x[keep] for x in part) + (points[keep].astype(np.float32),), targets[keep], [k for k, m in zip(keys, keep) if m]))
+    return out
+
+
+def tracked_lines(path):
+    """(line number, record, its 68 points (68 x 2)) of each line of a `facetrack track --raw` file
+    with raw landmarks and a pose."""
     with open(path) as f:
         for i, line in enumerate(f):
             r = json.loads(line)
             raw = r.get("raw")
-            if not r["tracked"] or not raw or raw.get("landmarks") is None or raw.get("pose") is None:
-                continue
-            t = teacher.targets(key_of(i, r), names)
-            if t is None:
-                continue
-            points.append(raw["landmarks"]); pitch.append(raw["pose"]["euler_deg"][0]); yaw.append(raw["pose"]["euler_deg"][1])
-            targets.append(t)
+            if r["tracked"] and raw and raw.get("landmarks") is not None and raw.get("pose") is not None:
+                yield i, r, np.array(raw["landmarks"], np.float64)
+
+
+def read_tracked(path, key_of, teacher, names):
+    """The tracked lines of a `facetrack track --raw` file that the teacher read: ((points, pitch,
+    yaw), targets, keys), or None; key_of(line number, record) is the teacher's key of a line."""
+    points, pitch, yaw, targets, keys = [], [], [], [], []
+    for i, r, p in tracked_lines(path):
+        key = key_of(i, r)
+        t = teacher.targets(key, names)
+        if t is None:
+            continue
+        points.append(p); pitch.append(r["raw"]["pose"]["euler_deg"][0]); yaw.append(r["raw"]["pose"]["euler_deg"][1])
+        targets.append(t); keys.append(key)
     if not points:
         return None
-    return (np.array(points, np.float32), np.array(pitch, np.float32), np.array(yaw, np.float32)), np.array(targets, np.float32)
+    return (np.array(points, np.float32), np.array(pitch, np.float32), np.array(yaw, np.float32)), np.array(targets, np.float32), keys
 
 
 def load_clips(folder, splits, which, teacher, names):
-    """Per clip of split `which`, ((points, pitch, yaw), targets) of its tracked frames."""
+    """Per clip of split `which`, ((points, pitch, yaw), targets, keys) of its tracked frames."""
     out = []
     for file in sorted(os.listdir(folder)):
         clip = file[:-len(".jsonl")] + ".mp4"
@@ -160,6 +201,8 @@ def main():
     p.add_argument("--teacher", default="../shared/data/teacher")
     p.add_argument("--out", default="build/cnn/geometry")
     p.add_argument("--epochs", type=int, default=60)
+    p.add_argument("--lips", default="", help="train_lips.py's OUT.npz: the 40 lip points as 80 more features (the teacher's "
+                   "for the training samples, the lip net's for the validation ones, as the stage reads them)")
     a = p.parse_args()
     nets.setup_torch(2, seed=1)
     with open(a.net + ".columns.txt") as f:
@@ -169,7 +212,7 @@ def main():
     order = expression_mirror(names)
 
     def stacked(sets, with_mirror):
-        parts, targets = [p for p, _ in sets], [t for _, t in sets]
+        parts, targets = [p for p, _, _ in sets], [t for _, t, _ in sets]
         X = [features(*part) for part in parts]
         Xm = [features(*mirrored(*part)) for part in parts]
         Y = list(targets)
@@ -177,10 +220,12 @@ def main():
             X, Xm, Y = X + Xm, Xm + X, Y + [t[:, order] for t in targets]
         return (torch.tensor(np.concatenate(X)), torch.tensor(np.concatenate(Xm)), torch.tensor(np.concatenate(Y)))
 
+    lips = np.load(a.lips) if a.lips else None
+    load = (lambda sets, which: with_lips(sets, lips, which)) if a.lips else (lambda sets, which: sets)
     crops = (lambda which: load_crops(a.tracked_crops, which, teacher, names)) if a.tracked_crops else (lambda which: [])
-    x_train, _, y_train = stacked(load_clips(a.tracked, splits, "train", teacher, names) + crops("train"), True)
-    people = stacked(load_clips(a.tracked, splits, "validation", teacher, names), False)
-    validation_crops = crops("validation")
+    x_train, _, y_train = stacked(load(load_clips(a.tracked, splits, "train", teacher, names) + crops("train"), "train"), True)
+    people = stacked(load(load_clips(a.tracked, splits, "validation", teacher, names), "validation"), False)
+    validation_crops = load(crops("validation"), "validation")
     x_val, xm_val, y_val = (torch.cat([people[i], stacked(validation_crops, False)[i]]) for i in range(3)) if validation_crops else people
     print(f"samples: {len(x_train)} training (with their mirror images), {len(people[0])} validation people's frames, "
           f"{len(x_val) - len(people[0])} validation crops", flush=True)

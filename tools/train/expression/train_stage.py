@@ -411,6 +411,8 @@ def main():
     p.add_argument("--batch", type=int, default=128)
     p.add_argument("--resume", action="store_true")
     p.add_argument("--export-only", action="store_true", help="export OUT.pt's net (e.g. while it trains) and stop")
+    p.add_argument("--from-onnx", default="", help="with --export-only: instead, the validation figures of this ONNX net "
+                   "(e.g. a shipped file's, pack_cnn --export-net) as OUT.validation_*.txt; nothing exported")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--landmarks", action="store_true", help="train the landmark net (68 displacements) instead of a stage")
     p.add_argument("--expressions", action="store_true",
@@ -487,6 +489,15 @@ def main():
     net = Stage(y_train.shape[1], widths, a.hidden, a.dropout, strides)
     opt = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
     epoch, started, best = 0, time.time(), float("inf")
+    if a.export_only and a.from_onnx:  # its outputs are the update itself: the spread is folded in
+        with open(a.from_onnx, "rb") as f:
+            net = nets.onnx_chain(f.read())
+        write_columns(a.out, columns)
+        if TEACHER is not None:
+            ones = torch.ones(y_train.shape[1])
+            write_teacher_figures(a.out, *teacher_readings(net, validation, ones, (flip_order, flip_sign), columns[6:]), columns[6:])
+        print(f"wrote {a.out}.validation_*.txt of {a.from_onnx}", flush=True)
+        return
     if a.export_only:
         state = torch.load(a.out + (".best.pt" if os.path.exists(a.out + ".best.pt") else ".pt"))
         # the layers it was trained with

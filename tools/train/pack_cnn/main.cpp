@@ -7,7 +7,8 @@
 //                                            [--min-validation-r R [--leave-out NAME,...]]]
 //                        [--mirror-average] [--corrects-fit]
 //                        [--base FILE.ftm]
-//                        [--geometry build/cnn/geometry]
+//                        [--geometry build/cnn/geometry [--lips build/cnn/lips.onnx]]
+//                        [--base FILE.ftm --export-net OUT.onnx]
 //                        --out build/cnn/cascade.ftm [--provenance "..."]
 //
 // --base: start from that file's nets (the options given replace theirs; --nets replaces its stage and its
@@ -38,6 +39,10 @@
 // shape is read from it where its r on the validation people's frames (PREFIX.validation_geometry_r.txt,
 // a pair's mean) is at least R and above the texture net's on the same frames (the trainer's
 // OUT.validation_r_frames.txt), between its rest level there (PREFIX.validation_geometry_rest.txt) and 1.
+// --lips NET.onnx (with --geometry): the lip net of tools/train/expression/train_lips.py, whose points
+// the geometry net was trained to read (train_geometry.py --lips; expression/lip_net.hpp).
+// --export-net OUT.onnx (with --base): writes the base's first stage net and stops (train_stage.py
+// --from-onnx computes its validation figures).
 //
 // Each ONNX file's OUT.columns.txt (written beside it by the trainer) must list
 // the update outputs cnn/update_net.hpp defines, with the labelled expressions
@@ -52,6 +57,7 @@
 #include "data/dense/label_table.hpp"
 #include "expression/geometry_net.hpp"
 #include "expression/landmark_net.hpp"
+#include "expression/lip_net.hpp"
 #include "expression/update_net.hpp"
 #include "facetrack/face_model.hpp"
 #include "fit/fit_basis.hpp"
@@ -139,7 +145,7 @@ std::vector<nn::DenseLayer> readGeometryNet(const std::string& prefix, const std
         for (float& v : l.weight) in >> v;
         for (float& v : l.bias) in >> v;
     }
-    expression::GeometryFeatures f;
+    Eigen::VectorXf f(layers.front().cols);
     for (float& v : f) in >> v;
     Eigen::VectorXf expected(layers.back().rows);
     for (float& v : expected) in >> v;
@@ -172,15 +178,23 @@ int run(int argc, char** argv) {
     const tools::Args args(
         std::vector<std::string>(argv + 1, argv + argc),
         {"--nets", "--rounds", "--landmark-net", "--out", "--provenance", "--neutral-from", "--min-validation-r", "--leave-out", "--base",
-         "--geometry"},
+         "--geometry", "--lips", "--export-net"},
         {"--help", "--expressions-only", "--mirror-average", "--corrects-fit", "--rest-from-validation", "--gain-from-validation"});
-    if (args.has("--help") || !(args.has("--nets") || args.has("--base")) || !args.has("--out")) {
+    if (args.has("--help") || !(args.has("--nets") || args.has("--base")) || !(args.has("--out") || args.has("--export-net"))) {
         std::puts(
             "usage: pack_cnn --nets A.onnx[,B.onnx] [--rounds 1[,1]] [--landmark-net L.onnx] [--expressions-only] --out FILE.ftm\n"
             "                [--provenance TEXT] [--neutral-from LABELS.csv] [--min-validation-r R [--leave-out N,...]]\n"
             "                [--base FILE.ftm] [--mirror-average] [--corrects-fit] [--rest-from-validation\n"
-            "                [--gain-from-validation]] [--geometry PREFIX]");
+            "                [--gain-from-validation]] [--geometry PREFIX [--lips NET.onnx]]\n"
+            "       pack_cnn --base FILE.ftm --export-net OUT.onnx");
         return args.has("--help") ? 0 : 2;
+    }
+    if (args.has("--export-net")) {  // the base's first stage net, e.g. for train_stage.py --from-onnx
+        if (!args.has("--base")) throw Error("--export-net goes with --base");
+        const nn::CnnModelData base = nn::readCnnModel(args.get("--base"));
+        std::ofstream(args.get("--export-net"), std::ios::binary) << base.stages.front().onnx;
+        std::printf("wrote %s\n", args.get("--export-net").c_str());
+        return 0;
     }
     const auto nets = tools::splitList(args.get("--nets", ""));
     auto rounds = tools::splitList(args.get("--rounds", ""));
@@ -197,6 +211,7 @@ int run(int argc, char** argv) {
             model.geometry_reported.clear();
             model.geometry_neutral.clear();
             model.geometry_full.clear();
+            model.lip_net.clear();
         }
     }
     model.provenance = args.get("--provenance", model.provenance);
@@ -277,6 +292,14 @@ int run(int argc, char** argv) {
         if (!args.has("--min-validation-r") || nets.empty()) throw Error("--geometry goes with --nets and --min-validation-r");
         const std::string prefix = args.get("--geometry");
         model.geometry_net = readGeometryNet(prefix, model.expressions);
+        model.lip_net.clear();
+        if (args.has("--lips")) {
+            model.lip_net = readBytes(args.get("--lips"));
+            expression::LipNet check(model.lip_net, model.lip_patch_size, model.lip_patch_half, args.get("--lips"));  // loads, or throws
+        }
+        if (expression::GeometryNet(model.geometry_net, model.expressions).readsLips() != !model.lip_net.empty())
+            throw Error(prefix + ".geometry.txt: " +
+                        (model.lip_net.empty() ? "the net reads the lips: give --lips" : "the net does not read the lips"));
         // on the same frames as the geometry net's: the validation people's, without the warped copies
         const auto texture_r = pairAveraged(beside(nets.back(), ".validation_r_frames.txt"), model.expressions);
         const auto geometry_r = pairAveraged(prefix + ".validation_geometry_r.txt", model.expressions);
