@@ -30,8 +30,9 @@ cv::Matx23d mouthPatchToFrame(const core::Shape68& points, int size, float half)
     const NormalisingFrame frame = normalisingFrame(points);
     const Eigen::Matrix2f roll = frame.unroll().transpose();  // R(theta)
     const Eigen::Matrix2f a = frame.rms * roll * (2.f * half / static_cast<float>(size));
-    const Eigen::Vector2f t =
-        frame.centre + frame.rms * roll * (anchorOf(points, frame) + Eigen::Vector2f::Constant(half * (1.f / static_cast<float>(size) - 1.f)));
+    const Eigen::Vector2f t = frame.centre +
+                              frame.rms * roll *
+                                  (anchorOf(points, frame) + Eigen::Vector2f::Constant(half * (1.f / static_cast<float>(size) - 1.f)));
     return {a(0, 0), a(0, 1), t.x(), a(1, 0), a(1, 1), t.y()};
 }
 
