@@ -5,7 +5,7 @@ Landmarker's blendshapes read them (../shared/data/teacher: another model's pred
 truth; class Teacher of train_stage.py, each shape above its rest level).
 
   /usr/bin/python3 -m tools.train.expression.train_geometry --tracked build/tracked --net build/cnn/v2 \\
-        [--tracked-crops build/tracked_300w] [--out build/cnn/geometry] [--epochs 60]
+        [--tracked-crops build/tracked_300w] [--lips build/cnn/lips.npz] [--out build/cnn/geometry] [--epochs 60]
 
 --tracked: a folder of `facetrack track CLIP --raw --profile none --out DIR/<clip name>.jsonl`, one
 per clip of ../shared/data/clips; --tracked-crops: the 300-W crops as tools/data/track_faces300w.sh
@@ -22,7 +22,7 @@ stage reads them).
 The features (expression/geometry_net.hpp computes the same): the 68 points centred on their mean,
 rotated so that the line between the eyes' centres (means of points 36-41 and 42-47) is level,
 scaled to unit root-mean-square distance from the centre, as x0, y0, x1, ...; then sin(pitch) and
-sin(yaw) of the fit's head pose.
+sin(yaw) of the fit's head pose; with --lips, the 40 lip points of train_lips.py in the same frame.
 """
 import argparse, csv, json, os
 
