@@ -56,19 +56,19 @@ TEST(MouthPatch, IsTheOneTheTrainerCuts) {
     cv::Matx23d expected;
     for (int k = 0; k < 6; ++k) in >> expected.val[k];
     ASSERT_TRUE(in) << "tests/data/mouth_patch_fixture.txt (tools/train/make_parity_fixture.py)";
-    const cv::Matx23d m = expression::mouthPatchToFrame(face, 64, 0.75f);
+    const cv::Matx23d m = expression::mouthPatch(face, 64, 0.75f).to_frame;
     for (int k = 0; k < 6; ++k) EXPECT_NEAR(m.val[k], expected.val[k], 1e-3 * std::max(1.0, std::abs(expected.val[k]))) << k;
 }
 
 TEST(MouthPatch, FollowsTheFaceAndHoldsTheMouth) {
     const core::Shape68 face = someFace(1);
-    const cv::Matx23d m = expression::mouthPatchToFrame(face, 64, 0.75f);
+    const cv::Matx23d m = expression::mouthPatch(face, 64, 0.75f).to_frame;
     for (const float angle : {0.3f, -0.7f, 2.5f}) {
         Eigen::Matrix2f r;
         r << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
         const Eigen::Vector2f shift(-40.f, 90.f);
         const core::Shape68 moved = ((2.5f * r * face).colwise() + shift).eval();
-        const cv::Matx23d n = expression::mouthPatchToFrame(moved, 64, 0.75f);
+        const cv::Matx23d n = expression::mouthPatch(moved, 64, 0.75f).to_frame;
         for (const auto& [u, v] : {std::pair{0.f, 0.f}, {63.f, 0.f}, {31.5f, 40.f}})
             EXPECT_LT((mapped(n, u, v) - (2.5f * r * mapped(m, u, v) + shift)).norm(), 1e-3f) << angle;
     }

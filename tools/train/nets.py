@@ -27,37 +27,45 @@ def standardise(x):
     return (x - mean) / std
 
 
+def _varint(buf, pos):
+    """The varint at buf[pos:] and the position after it."""
+    value, shift = 0, 0
+    while True:
+        b = buf[pos]
+        pos += 1
+        value |= (b & 0x7F) << shift
+        shift += 7
+        if b < 0x80:
+            return value, pos
+
+
+def _packed_varints(buf):
+    values, pos = [], 0
+    while pos < len(buf):
+        value, pos = _varint(buf, pos)
+        values.append(value)
+    return values
+
+
 def _fields(buf):
     """The (field number, wire type, value) of a protobuf message's bytes: varints as ints,
     length-delimited fields as bytes, fixed 32 / 64-bit fields as their raw bytes."""
     pos = 0
-
-    def varint():
-        nonlocal pos
-        value, shift = 0, 0
-        while True:
-            b = buf[pos]
-            pos += 1
-            value |= (b & 0x7F) << shift
-            shift += 7
-            if b < 0x80:
-                return value
-
     while pos < len(buf):
-        key = varint()
+        key, pos = _varint(buf, pos)
         number, wire = key >> 3, key & 7
         if wire == 0:
-            yield number, wire, varint()
-        elif wire == 2:
-            n = varint()
-            yield number, wire, bytes(buf[pos:pos + n])
-            pos += n
+            value, pos = _varint(buf, pos)
+            yield number, wire, value
+            continue
+        if wire == 2:
+            n, pos = _varint(buf, pos)
         elif wire in (1, 5):
             n = 8 if wire == 1 else 4
-            yield number, wire, bytes(buf[pos:pos + n])
-            pos += n
         else:
             raise ValueError(f"ONNX: protobuf wire type {wire} not read")
+        yield number, wire, bytes(buf[pos:pos + n])
+        pos += n
 
 
 def onnx_chain(onnx):
@@ -120,18 +128,3 @@ def onnx_chain(onnx):
             raise ValueError(f"ONNX: a {op} node is not part of a plain chain")
     return torch.nn.Sequential(*layers).eval()
 
-
-def _packed_varints(buf):
-    return [v for _, _, v in _fields(_as_varint_fields(buf))]
-
-
-def _as_varint_fields(buf):
-    """Packed varints as a message of field-1 varints, so that _fields reads them."""
-    out, pos = bytearray(), 0
-    while pos < len(buf):
-        end = pos
-        while buf[end] >= 0x80:
-            end += 1
-        out += b"\x08" + buf[pos:end + 1]
-        pos = end + 1
-    return bytes(out)

@@ -31,8 +31,12 @@ extern const std::array<int, nn::kLipPoints> kLipMirror;
 /// The lips of the mirror image, in its normalised frame (which is the face's, mirrored).
 LipPoints mirroredLips(const LipPoints& lips);
 
-/// The 2 x 3 map from patch pixels to frame pixels, p(u) above.
-cv::Matx23d mouthPatchToFrame(const core::Shape68& points, int size, float half);
+/// The mouth patch of a face: the 2 x 3 map from patch pixels to frame pixels, p(u) above, and a.
+struct MouthPatch {
+    cv::Matx23d to_frame;
+    Eigen::Vector2f anchor;
+};
+MouthPatch mouthPatch(const core::Shape68& points, int size, float half);
 
 class LipNet {
 public:

@@ -297,7 +297,7 @@ int run(int argc, char** argv) {
             model.lip_net = readBytes(args.get("--lips"));
             expression::LipNet check(model.lip_net, model.lip_patch_size, model.lip_patch_half, args.get("--lips"));  // loads, or throws
         }
-        if (expression::GeometryNet(model.geometry_net, model.expressions).readsLips() != !model.lip_net.empty())
+        if ((model.geometry_net.front().cols != nn::kGeometryFeatures) != !model.lip_net.empty())
             throw Error(prefix + ".geometry.txt: " +
                         (model.lip_net.empty() ? "the net reads the lips: give --lips" : "the net does not read the lips"));
         // on the same frames as the geometry net's: the validation people's, without the warped copies
